@@ -1,0 +1,124 @@
+"""Atomic, versioned, pickle-free array files (numpy + json only).
+
+A file is a ``.npz`` archive whose arrays are stored under their own names
+plus one array ``__header__`` holding a UTF-8 JSON document with at least
+``{"format": <kind>, "format_version": <int>, "sha256": <hex>}``. The checksum
+covers every array's name, dtype, shape and bytes, so a corrupt or edited file
+is detected on load. Writes go to a temporary file in the same directory,
+are fsync'ed and then renamed over the target: a reader never sees half a file.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import tempfile
+import zipfile
+from pathlib import Path
+from typing import Any, Mapping
+
+import numpy as np
+
+from catgrasp_drake.errors import ModelFileError
+
+_HEADER_KEY = "__header__"
+
+
+def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> None:
+    """Write ``data`` to ``path`` atomically (temporary file + fsync + rename)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+
+
+def atomic_write_text(path: str | os.PathLike, text: str) -> None:
+    """Write UTF-8 ``text`` to ``path`` atomically."""
+    atomic_write_bytes(path, text.encode("utf-8"))
+
+
+def _arrays_checksum(arrays: Mapping[str, np.ndarray]) -> str:
+    h = hashlib.sha256()
+    for name in sorted(arrays):
+        a = np.ascontiguousarray(arrays[name])
+        h.update(name.encode())
+        h.update(str(a.dtype.str).encode())
+        h.update(str(a.shape).encode())
+        h.update(a.tobytes())
+    return h.hexdigest()
+
+
+def save_arrays(
+    path: str | os.PathLike,
+    arrays: Mapping[str, np.ndarray],
+    *,
+    kind: str,
+    version: int,
+    meta: Mapping[str, Any] | None = None,
+) -> None:
+    """Save named arrays plus a JSON header atomically to ``path`` (.npz).
+
+    ``meta`` must be JSON-serialisable; object arrays are refused (no pickle).
+    """
+    arrays = {k: np.asarray(v) for k, v in arrays.items()}
+    for name, a in arrays.items():
+        if name == _HEADER_KEY:
+            raise ValueError(f"array name {_HEADER_KEY!r} is reserved")
+        if a.dtype == object:
+            raise ValueError(f"array {name!r} has dtype object; only numeric arrays can be saved")
+    header = {
+        "format": kind,
+        "format_version": int(version),
+        "sha256": _arrays_checksum(arrays),
+        "meta": dict(meta or {}),
+    }
+    import io
+
+    buf = io.BytesIO()
+    header_array = np.frombuffer(json.dumps(header, sort_keys=True).encode("utf-8"), dtype=np.uint8)
+    np.savez_compressed(buf, **{_HEADER_KEY: header_array}, **arrays)
+    atomic_write_bytes(path, buf.getvalue())
+
+
+def load_arrays(
+    path: str | os.PathLike, *, kind: str, version: int
+) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+    """Load a file written by :func:`save_arrays`; return ``(arrays, meta)``.
+
+    Raises :class:`ModelFileError` with a one-line message if the file is
+    missing, not an archive, of another kind or version, or fails its checksum.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise ModelFileError(f"{path}: file not found")
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            arrays = {k: z[k] for k in z.files}
+    except (zipfile.BadZipFile, ValueError, OSError, EOFError, KeyError) as e:
+        raise ModelFileError(f"{path}: not a readable {kind} file ({type(e).__name__}: {e})") from None
+    if _HEADER_KEY not in arrays:
+        raise ModelFileError(f"{path}: no header; not a {kind} file")
+    try:
+        header = json.loads(arrays.pop(_HEADER_KEY).tobytes().decode("utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError):
+        raise ModelFileError(f"{path}: corrupt header") from None
+    if header.get("format") != kind:
+        raise ModelFileError(f"{path}: is a {header.get('format')!r} file, expected {kind!r}")
+    if header.get("format_version") != version:
+        raise ModelFileError(
+            f"{path}: format version {header.get('format_version')} but this catgrasp_drake reads "
+            f"version {version}; rebuild the file with this version"
+        )
+    if header.get("sha256") != _arrays_checksum(arrays):
+        raise ModelFileError(f"{path}: checksum mismatch; the file is corrupt or was edited")
+    return arrays, header.get("meta", {})

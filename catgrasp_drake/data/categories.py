@@ -1,0 +1,261 @@
+"""Procedural generators of the embedded object categories.
+
+Each generator draws part proportions from realistic ranges with a
+``numpy.random.Generator`` and builds a watertight solid in the category's
+canonical frame (DESIGN.md section 3): z up, support base on z = 0, the
+functional direction along +y (drill: chuck axis; spray bottle: nozzle; mug:
+handle), x lateral, object roughly centred on x = 0. Lengths in metres.
+
+Every instance carries ground-truth functional regions as axis-aligned boxes
+``{"center": [x, y, z], "half_extents": [hx, hy, hz]}`` in that frame: the
+trigger of drills and spray bottles, the handle of mugs.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import trimesh
+from manifold3d import Manifold
+
+from catgrasp_drake.data import shapes
+from catgrasp_drake.errors import InputError
+
+#: Densities (kg/m^3) used for mass and inertia of the solid meshes. Real tools
+#: are hollow shells; these effective densities give realistic masses
+#: (drill ~1.0-1.8 kg, spray bottle ~0.3-0.7 kg when partly filled, mug ~0.3 kg).
+DENSITY_KG_M3 = {"drill": 1300.0, "spray_bottle": 500.0, "mug": 1900.0}
+
+
+@dataclass(frozen=True)
+class GeneratedInstance:
+    """A generated object: watertight mesh, functional regions, parameters."""
+
+    category: str
+    mesh: trimesh.Trimesh
+    regions: dict[str, dict[str, list[float]]]
+    params: dict[str, float] = field(default_factory=dict)
+
+
+def _box_region(lo, hi, margin: float = 0.0) -> dict[str, list[float]]:
+    lo = np.asarray(lo, float) - margin
+    hi = np.asarray(hi, float) + margin
+    return {
+        "center": [round(float(v), 6) for v in (lo + hi) / 2],
+        "half_extents": [round(float(v), 6) for v in (hi - lo) / 2],
+    }
+
+
+def _u(rng: np.random.Generator, lo: float, hi: float) -> float:
+    return round(float(rng.uniform(lo, hi)), 5)
+
+
+def _ground(solid: Manifold) -> Manifold:
+    """Shift so the lowest point is exactly on z = 0."""
+    (_, _, zmin, _, _, _) = solid.bounding_box()
+    return solid.translate((0.0, 0.0, -zmin))
+
+
+# ----------------------------------------------------------------------------- drill
+def drill_params(rng: np.random.Generator) -> dict[str, float]:
+    p = {
+        "battery_width": _u(rng, 0.055, 0.085),
+        "battery_length": _u(rng, 0.075, 0.125),
+        "battery_height": _u(rng, 0.022, 0.05),
+        "battery_offset_y": _u(rng, -0.01, 0.025),
+        "handle_height": _u(rng, 0.075, 0.12),
+        "handle_depth": _u(rng, 0.034, 0.048),
+        "handle_width": _u(rng, 0.028, 0.040),
+        "handle_tilt_deg": _u(rng, 0.0, 22.0),
+        "body_radius": _u(rng, 0.024, 0.040),
+        "body_back": _u(rng, 0.035, 0.07),
+        "body_front": _u(rng, 0.06, 0.12),
+        "body_taper": _u(rng, 0.7, 1.0),
+        "chuck_radius": _u(rng, 0.011, 0.021),
+        "chuck_length": _u(rng, 0.025, 0.055),
+        "trigger_height": _u(rng, 0.018, 0.03),
+        "trigger_depth": _u(rng, 0.010, 0.016),
+        "trigger_width": _u(rng, 0.012, 0.018),
+    }
+    # keep the real drills' overall length range (0.13-0.24 m)
+    length = p["body_back"] + p["body_front"] + p["chuck_length"]
+    if length > 0.235:
+        p["body_front"] = round(p["body_front"] - (length - 0.235), 5)
+    return p
+
+
+def build_drill(p: dict[str, float]) -> GeneratedInstance:
+    bh, hh = p["battery_height"], p["handle_height"]
+    br = p["body_radius"]
+    tilt = np.radians(p["handle_tilt_deg"])
+    battery = shapes.rounded_box(
+        (0.0, p["battery_offset_y"], bh / 2), (p["battery_width"], p["battery_length"], bh), 0.008)
+    # handle: hull of an elliptic section at the battery top and one under the body,
+    # the top leaning back (toward -y) by the tilt angle
+    z_body = bh + hh + 0.8 * br
+    z0, z1 = bh - 0.004, z_body
+    dy = -np.tan(tilt) * (z1 - z0)
+    hx, hy = p["handle_width"] / 2, p["handle_depth"] / 2
+    handle = Manifold.batch_hull([
+        shapes.elliptic_slab((0.0, 0.0, z0), hx, hy, 0.004),
+        shapes.elliptic_slab((0.0, dy, z1), hx, hy, 0.004),
+    ])
+    # motor body along y: rounded back, tapered toward the chuck
+    yb, yf = -p["body_back"] + dy, p["body_front"] + dy
+    body = Manifold.batch_hull([
+        shapes.sphere((0.0, yb + br, z_body), br, shapes.SEGMENTS),
+        shapes.cylinder_y(yb + br, yf, br, br * p["body_taper"], 0.0, z_body),
+    ])
+    cr = min(p["chuck_radius"], 0.9 * br * p["body_taper"])
+    chuck = shapes.cylinder_y(yf - 0.002, yf + p["chuck_length"], cr, 0.75 * cr, 0.0, z_body)
+    # trigger: a rounded block on the front of the handle, just under the body
+    t_top = z_body - 0.85 * br
+    t_bot = t_top - p["trigger_height"]
+    z_mid = (t_top + t_bot) / 2
+    y_front_handle = hy + dy * (z_mid - z0) / (z1 - z0)
+    t_lo = np.array([-p["trigger_width"] / 2, y_front_handle - 0.006, t_bot])
+    t_hi = np.array([p["trigger_width"] / 2, y_front_handle + p["trigger_depth"], t_top + 0.004])
+    trigger = shapes.rounded_box((t_lo + t_hi) / 2, t_hi - t_lo, 0.004)
+    solid = battery + handle + body + chuck + trigger
+    shift = -solid.bounding_box()[2]
+    solid = solid.translate((0.0, 0.0, shift))
+    t_lo[2] += shift
+    t_hi[2] += shift
+    regions = {"trigger": _box_region([t_lo[0], y_front_handle, t_lo[2]], t_hi, margin=0.004)}
+    return GeneratedInstance("drill", shapes.to_trimesh(solid), regions, p)
+
+
+# ----------------------------------------------------------------------- spray bottle
+def spray_bottle_params(rng: np.random.Generator) -> dict[str, float]:
+    return {
+        "body_width": _u(rng, 0.065, 0.105),
+        "body_depth": _u(rng, 0.040, 0.068),
+        "body_height": _u(rng, 0.12, 0.21),
+        "shoulder_height": _u(rng, 0.015, 0.045),
+        "waist": _u(rng, 0.82, 1.0),
+        "neck_radius": _u(rng, 0.012, 0.017),
+        "neck_height": _u(rng, 0.012, 0.03),
+        "head_length": _u(rng, 0.055, 0.085),
+        "head_height": _u(rng, 0.028, 0.045),
+        "head_width": _u(rng, 0.026, 0.036),
+        "head_back": _u(rng, 0.012, 0.025),
+        "nozzle_radius": _u(rng, 0.004, 0.007),
+        "nozzle_length": _u(rng, 0.006, 0.014),
+        "trigger_length": _u(rng, 0.030, 0.048),
+        "trigger_width": _u(rng, 0.012, 0.018),
+        "trigger_thickness": _u(rng, 0.006, 0.010),
+        "trigger_gap": _u(rng, 0.010, 0.018),
+    }
+
+
+def build_spray_bottle(p: dict[str, float]) -> GeneratedInstance:
+    w, d, h = p["body_width"], p["body_depth"], p["body_height"]
+    sh = p["shoulder_height"]
+    nr = p["neck_radius"]
+    # body: hull of elliptic sections (bottom, waist, top of wall, shoulder into the neck)
+    body = Manifold.batch_hull([
+        shapes.elliptic_slab((0.0, 0.0, 0.003), w / 2 * 0.96, d / 2 * 0.96, 0.006),
+        shapes.elliptic_slab((0.0, 0.0, 0.012), w / 2, d / 2, 0.006),
+        shapes.elliptic_slab((0.0, 0.0, h - sh), w / 2, d / 2, 0.004),
+        shapes.elliptic_slab((0.0, 0.0, h), nr * 1.25, nr * 1.25, 0.004),
+    ])
+    if p["waist"] < 0.99:  # a grip waist: cut the sides with two large ellipsoids
+        cut_r = w * 0.5
+        inset = w / 2 * (1 - p["waist"])
+        for sx in (-1, 1):
+            body = body - shapes.ellipsoid(
+                (sx * (w / 2 + cut_r - inset), 0.0, 0.45 * h), (cut_r, d, 0.28 * h))
+    neck_top = h + p["neck_height"]
+    neck = Manifold.cylinder(p["neck_height"] + 0.004, nr, nr, shapes.SEGMENTS).translate((0, 0, h - 0.002))
+    # trigger head: a rounded block from behind the neck forward, sloping nose
+    hl, hh, hw = p["head_length"], p["head_height"], p["head_width"]
+    y0, y1 = -p["head_back"], -p["head_back"] + hl
+    z0, z1 = neck_top, neck_top + hh
+    head = Manifold.batch_hull([
+        shapes.rounded_box(((0.0), (y0 + y1) / 2 - 0.005, (z0 + z1) / 2), (hw, hl - 0.01, hh), 0.006),
+        shapes.rounded_box((0.0, y1 - 0.006, z1 - 0.35 * hh), (0.7 * hw, 0.012, 0.5 * hh), 0.004),
+    ])
+    nz = z1 - 0.35 * hh
+    nozzle = shapes.cylinder_y(y1 - 0.003, y1 + p["nozzle_length"], p["nozzle_radius"],
+                               p["nozzle_radius"] * 0.85, 0.0, nz, shapes.SMALL_SEGMENTS)
+    # trigger: a lever hanging from the head's underside in front of the neck, tilted forward
+    ty = nr + p["trigger_gap"] + p["trigger_thickness"] / 2
+    ty = min(ty, y1 - 0.012)
+    tl = p["trigger_length"]
+    top = np.array([0.0, ty, z0 + 0.004])
+    bottom = np.array([0.0, ty + 0.35 * tl, z0 - tl])
+    tw, tt = p["trigger_width"], p["trigger_thickness"]
+    lever = Manifold.batch_hull([
+        shapes.rounded_box(top, (tw, tt, 0.008), 0.003),
+        shapes.rounded_box(bottom, (tw * 0.9, tt, 0.008), 0.003),
+    ])
+    solid = body + neck + head + nozzle + lever
+    shift = -solid.bounding_box()[2]
+    solid = solid.translate((0.0, 0.0, shift))
+    lo = np.minimum(top, bottom) - [tw / 2, tt / 2, 0.004]
+    hi = np.maximum(top, bottom) + [tw / 2, tt / 2, 0.0]
+    hi[2] = z0  # only the part below the head is reachable
+    lo[2] += shift
+    hi[2] += shift
+    regions = {"trigger": _box_region(lo, hi, margin=0.004)}
+    return GeneratedInstance("spray_bottle", shapes.to_trimesh(solid), regions, p)
+
+
+# ------------------------------------------------------------------------------- mug
+def mug_params(rng: np.random.Generator) -> dict[str, float]:
+    return {
+        "radius": _u(rng, 0.032, 0.05),
+        "height": _u(rng, 0.07, 0.12),
+        "top_flare": _u(rng, 0.95, 1.18),
+        "wall": _u(rng, 0.004, 0.007),
+        "bottom": _u(rng, 0.006, 0.011),
+        "handle_ring": _u(rng, 0.018, 0.032),
+        "handle_tube": _u(rng, 0.005, 0.009),
+        "handle_flatness": _u(rng, 0.6, 1.0),
+        "handle_stretch": _u(rng, 0.8, 1.35),
+        "handle_height": _u(rng, 0.42, 0.6),
+    }
+
+
+def build_mug(p: dict[str, float]) -> GeneratedInstance:
+    r0, h = p["radius"], p["height"]
+    r1 = r0 * p["top_flare"]
+    outer = Manifold.cylinder(h, r0, r1, 56)
+    inner_r0 = r0 - p["wall"]
+    inner_r1 = r1 - p["wall"]
+    cavity = Manifold.cylinder(h, inner_r0 + (inner_r1 - inner_r0) * p["bottom"] / h, inner_r1, 56) \
+        .translate((0, 0, p["bottom"])) + Manifold.cylinder(0.01, inner_r1, inner_r1, 56).translate((0, 0, h - 0.0005))
+    cup = outer - cavity
+    # handle: a C-shaped torus arc on the +y side in the y-z plane
+    ring = p["handle_ring"]
+    # keep the whole handle between the base and 6 mm under the rim
+    reach = ring * p["handle_stretch"] + p["handle_tube"]
+    zc = float(np.clip(p["handle_height"] * h, reach + 0.004, h - 0.006 - reach))
+    r_at = r0 + (r1 - r0) * zc / h
+    tube_in_plane = p["handle_tube"]
+    tube_across = p["handle_tube"] / max(p["handle_flatness"], 1e-3) * 0.8
+    handle = shapes.partial_torus_yz((0.0, 0.0, 0.0), ring, tube_across, tube_in_plane, 200.0, -10.0)
+    handle = handle.scale((1.0, p["handle_stretch"], 1.0)).translate((0.0, r_at - 0.2 * ring, zc))
+    handle = handle - Manifold.cylinder(h, r0 - 0.5 * p["wall"], r1 - 0.5 * p["wall"], 56)  # nothing inside the cup
+    solid = cup + handle
+    (xmin, ymin, zmin, xmax, ymax, zmax) = handle.bounding_box()
+    lo = np.array([xmin, max(ymin, r_at), zmin])
+    hi = np.array([xmax, ymax, zmax])
+    regions = {"handle": _box_region(lo, hi, margin=0.003)}
+    return GeneratedInstance("mug", shapes.to_trimesh(solid), regions, p)
+
+
+GENERATORS = {
+    "drill": (drill_params, build_drill),
+    "spray_bottle": (spray_bottle_params, build_spray_bottle),
+    "mug": (mug_params, build_mug),
+}
+
+
+def generate_instance(category: str, rng: np.random.Generator) -> GeneratedInstance:
+    """Draw parameters for ``category`` from ``rng`` and build the instance."""
+    if category not in GENERATORS:
+        raise InputError(f"unknown category {category!r}; known: {', '.join(GENERATORS)}")
+    make_params, build = GENERATORS[category]
+    return build(make_params(rng))

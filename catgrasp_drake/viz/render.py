@@ -1,0 +1,122 @@
+"""Headless mesh rendering with Drake's RenderEngineVtk, and contact sheets.
+
+Used for the README's pictures. No display is needed: RenderEngineVtk renders
+offscreen. Meshes must be ``.obj`` files with normals.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+from PIL import Image, ImageDraw
+
+from pydrake.geometry import (
+    ClippingRange,
+    ColorRenderCamera,
+    GeometryInstance,
+    MakeRenderEngineVtk,
+    Mesh,
+    PerceptionProperties,
+    RenderCameraCore,
+    RenderEngineVtkParams,
+    RenderLabel,
+    Rgba,
+    SceneGraph,
+)
+from pydrake.math import RigidTransform, RotationMatrix
+from pydrake.systems.sensors import CameraInfo
+
+from catgrasp_drake.core.fileio import atomic_write_bytes
+
+_RENDERER = "catgrasp_vtk"
+
+
+def look_at(eye, target, up=(0.0, 0.0, 1.0)) -> RigidTransform:
+    """Pose X_WC of a Drake camera (z forward, x right, y down) at ``eye`` looking at ``target``."""
+    eye, target, up = (np.asarray(v, float) for v in (eye, target, up))
+    z = target - eye
+    z /= np.linalg.norm(z)
+    x = np.cross(z, up)
+    if np.linalg.norm(x) < 1e-9:
+        x = np.cross(z, np.array([0.0, 1.0, 0.0]))
+    x /= np.linalg.norm(x)
+    y = np.cross(z, x)
+    return RigidTransform(RotationMatrix(np.column_stack([x, y, z])), eye)
+
+
+def render_mesh(
+    mesh_path: str | os.PathLike,
+    *,
+    color=(0.55, 0.6, 0.7, 1.0),
+    size: tuple[int, int] = (320, 320),
+    azimuth_deg: float = 35.0,
+    elevation_deg: float = 20.0,
+    fov_y_deg: float = 30.0,
+    bounds: tuple[np.ndarray, np.ndarray] | None = None,
+) -> np.ndarray:
+    """Render one mesh (in its own frame) to an RGB uint8 image of ``size`` (w, h).
+
+    The camera looks at the bounding-box centre from the +x side, rotated by
+    ``azimuth_deg`` about z toward -y and raised by ``elevation_deg``, so the
+    object's +y (functional direction) points right in the image.
+    """
+    if bounds is None:
+        import trimesh
+
+        m = trimesh.load(str(mesh_path), force="mesh")
+        bounds = (m.bounds[0], m.bounds[1])
+    lo, hi = (np.asarray(b, float) for b in bounds)
+    center = (lo + hi) / 2
+    radius = 0.5 * np.linalg.norm(hi - lo)
+    dist = 1.15 * radius / np.sin(np.radians(fov_y_deg) / 2)
+    az, el = np.radians(azimuth_deg), np.radians(elevation_deg)
+    eye = center + dist * np.array([np.cos(el) * np.cos(az), -np.cos(el) * np.sin(az), np.sin(el)])
+
+    scene_graph = SceneGraph()
+    scene_graph.AddRenderer(_RENDERER, MakeRenderEngineVtk(RenderEngineVtkParams(default_clear_color=[1.0, 1.0, 1.0])))
+    source = scene_graph.RegisterSource("render_mesh")
+    geometry = GeometryInstance(RigidTransform(), Mesh(str(mesh_path)), Path(mesh_path).stem)
+    props = PerceptionProperties()
+    props.AddProperty("phong", "diffuse", Rgba(*color))
+    props.AddProperty("label", "id", RenderLabel(1))
+    gid = scene_graph.RegisterAnchoredGeometry(source, geometry)
+    scene_graph.AssignRole(source, gid, props)
+    context = scene_graph.CreateDefaultContext()
+    query = scene_graph.get_query_output_port().Eval(context)
+    w, h = size
+    core = RenderCameraCore(_RENDERER, CameraInfo(w, h, np.radians(fov_y_deg)), ClippingRange(0.01, 10.0), RigidTransform())
+    image = query.RenderColorImage(ColorRenderCamera(core, False), scene_graph.world_frame_id(), look_at(eye, center))
+    return np.array(image.data, copy=True)[:, :, :3]
+
+
+def contact_sheet(
+    images: Sequence[np.ndarray],
+    labels: Sequence[str],
+    path: str | os.PathLike,
+    *,
+    columns: int = 6,
+    title: str | None = None,
+) -> None:
+    """Tile RGB images with labels into one PNG written atomically to ``path``."""
+    if not images:
+        raise ValueError("contact_sheet: no images")
+    h, w = images[0].shape[:2]
+    rows = (len(images) + columns - 1) // columns
+    top = 24 if title else 0
+    sheet = Image.new("RGB", (columns * w, rows * (h + 16) + top), "white")
+    draw = ImageDraw.Draw(sheet)
+    if title:
+        draw.text((6, 6), title, fill="black")
+    for k, (img, label) in enumerate(zip(images, labels)):
+        r, c = divmod(k, columns)
+        x, y = c * w, top + r * (h + 16)
+        sheet.paste(Image.fromarray(img), (x, y))
+        draw.text((x + 4, y + h + 2), label, fill="black")
+    import io
+
+    buf = io.BytesIO()
+    sheet.save(buf, format="PNG", optimize=True)
+    atomic_write_bytes(path, buf.getvalue())
