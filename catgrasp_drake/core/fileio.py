@@ -14,7 +14,6 @@ import hashlib
 import json
 import os
 import tempfile
-import zipfile
 from pathlib import Path
 from typing import Any, Mapping
 
@@ -104,7 +103,7 @@ def load_arrays(
     try:
         with np.load(path, allow_pickle=False) as z:
             arrays = {k: z[k] for k in z.files}
-    except (zipfile.BadZipFile, ValueError, OSError, EOFError, KeyError) as e:
+    except Exception as e:  # zipfile, zlib, numpy header errors: all mean "corrupt"
         raise ModelFileError(f"{path}: not a readable {kind} file ({type(e).__name__}: {e})") from None
     if _HEADER_KEY not in arrays:
         raise ModelFileError(f"{path}: no header; not a {kind} file")

@@ -228,7 +228,8 @@ def build_mug(p: dict[str, float]) -> GeneratedInstance:
         .translate((0, 0, p["bottom"])) + Manifold.cylinder(0.01, inner_r1, inner_r1, 56).translate((0, 0, h - 0.0005))
     cup = outer - cavity
     # handle: a C-shaped torus arc on the +y side in the y-z plane
-    ring = p["handle_ring"]
+    # the handle fits between the base and the rim: shrink the ring on short mugs
+    ring = min(p["handle_ring"], (h / 2 - 0.008 - p["handle_tube"]) / p["handle_stretch"])
     # keep the whole handle between the base and 6 mm under the rim
     reach = ring * p["handle_stretch"] + p["handle_tube"]
     zc = float(np.clip(p["handle_height"] * h, reach + 0.004, h - 0.006 - reach))

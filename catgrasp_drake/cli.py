@@ -1,0 +1,110 @@
+"""``catgrasp`` command line: the project's main jobs.
+
+Progress and results are printed here, never inside the library.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from catgrasp_drake.errors import CatgraspError
+
+
+def _cmd_generate_data(args) -> int:
+    from catgrasp_drake.data.dataset import generate_dataset, objects_dir, tree_digest
+
+    if args.check:
+        with tempfile.TemporaryDirectory() as tmp:
+            generate_dataset(tmp, seed=args.seed)
+            fresh, committed = tree_digest(tmp), tree_digest(objects_dir())
+        differ = sorted(k for k in fresh.keys() | committed.keys() if fresh.get(k) != committed.get(k))
+        if differ:
+            print(f"data set differs from seed {args.seed} in {len(differ)} files, e.g. {differ[:5]}")
+            return 1
+        print(f"data set matches seed {args.seed} byte for byte ({len(fresh)} files)")
+        return 0
+    out = Path(args.out) if args.out else None
+    t0 = time.perf_counter()
+    written = generate_dataset(out, seed=args.seed, progress=lambda w: print(f"  {w.name:18s} {w.mass_kg:.3f} kg"))
+    print(f"wrote {len(written)} instances to {out or objects_dir()} in {time.perf_counter() - t0:.1f} s")
+    return 0
+
+
+def _cmd_contact_sheet(args) -> int:
+    from catgrasp_drake.viz.sheets import dataset_contact_sheet
+
+    t0 = time.perf_counter()
+    dataset_contact_sheet(args.out, categories=args.categories)
+    print(f"wrote {args.out} in {time.perf_counter() - t0:.1f} s")
+    return 0
+
+
+def _cmd_clouds(args) -> int:
+    from catgrasp_drake.data.cloud_io import write_point_cloud
+    from catgrasp_drake.data.dataset import list_instances, load_mesh
+    from catgrasp_drake.data.pointclouds import full_cloud
+
+    out = Path(args.out)
+    for name in list_instances(args.category):
+        cloud = full_cloud(load_mesh(args.category, name), voxel=args.voxel)
+        write_point_cloud(out / f"{name}.{args.format}", cloud)
+        print(f"  {name:18s} {len(cloud):5d} points")
+    print(f"wrote {args.category} clouds to {out}")
+    return 0
+
+
+def _cmd_demo(args) -> int:
+    from catgrasp_drake.demo import run_demo
+
+    return run_demo(args)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="catgrasp", description=__doc__.splitlines()[0])
+    sub = p.add_subparsers(dest="command", required=True)
+
+    g = sub.add_parser("generate-data", help="regenerate the embedded object data set from its seed")
+    g.add_argument("--out", help="output directory (default: the repository's models/objects)")
+    g.add_argument("--seed", type=int, default=2018)
+    g.add_argument("--check", action="store_true", help="only verify the committed data set byte for byte")
+    g.set_defaults(func=_cmd_generate_data)
+
+    c = sub.add_parser("contact-sheet", help="render every instance into one PNG")
+    c.add_argument("--out", default="docs/objects.png")
+    c.add_argument("--categories", nargs="+", default=None)
+    c.set_defaults(func=_cmd_contact_sheet)
+
+    k = sub.add_parser("clouds", help="full (ray-cast + voxel grid) clouds of a category's instances")
+    k.add_argument("category")
+    k.add_argument("--out", default="out/clouds")
+    k.add_argument("--voxel", type=float, default=0.01)
+    k.add_argument("--format", choices=("npy", "pcd", "ply"), default="pcd")
+    k.set_defaults(func=_cmd_clouds)
+
+    d = sub.add_parser("demo", help="the main job on the embedded default data")
+    d.add_argument("--category", default="drill")
+    d.add_argument("--instance", default=None, help="held-out instance (default: the last one)")
+    d.add_argument("--seed", type=int, default=0)
+    d.add_argument("--out", default="out/demo")
+    d.set_defaults(func=_cmd_demo)
+    return p
+
+
+def main(argv=None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        return int(args.func(args) or 0)
+    except CatgraspError as e:
+        print(f"catgrasp: error: {e}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("catgrasp: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())
