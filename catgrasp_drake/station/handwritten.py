@@ -1,0 +1,111 @@
+"""Hand-written grasp motions stored as YAML (``models/grasps/<category>_handwritten.yaml``).
+
+The poses are written the way one describes a grasp: where the hand base link
+H sits relative to an annotated feature of the instance and where its fingers
+and palm point, all in the object frame O::
+
+    category: drill
+    anchor: {region: trigger, point: [0.0, 0.0, 0.0]}  # offset added to the region centre (m, O)
+    grasp:
+      position: [0.045, -0.10, -0.01]   # H origin relative to the anchor (m, O)
+      fingers: [0, 1, 0]                # H's +z (along the fingers) in O
+      palm: [-1, 0, 0]                  # H's +y (out of the palm) in O
+    pregrasp_distance: 0.08             # pregrasp = grasp moved back by this along -palm
+    postures: drill                     # hand posture set (models/svh/postures.yaml)
+    posture_overrides: {closed: {svh_index_distal: 1.2}}  # optional, per joint (rad)
+    lift_height: 0.12
+    hold_time: 2.0
+
+``fingers`` and ``palm`` need not be exactly orthogonal: the palm direction
+is orthogonalised against the fingers. The anchor makes one file fit every
+instance of the category (the trigger moves from drill to drill).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from catgrasp_drake.errors import InputError, ModelFileError
+from catgrasp_drake.grasping.motion import GraspMotion
+
+GRASPS_DIR = Path(__file__).resolve().parents[2] / "models" / "grasps"
+_FIELDS = {"category", "anchor", "grasp", "pregrasp_distance", "postures", "posture_overrides",
+           "lift_height", "hold_time", "description"}
+
+
+def hand_rotation(fingers, palm) -> np.ndarray:
+    """R_OH with H's +z along ``fingers`` and +y along ``palm`` (orthogonalised), x = y × z."""
+    z = np.asarray(fingers, float)
+    y = np.asarray(palm, float)
+    if z.shape != (3,) or y.shape != (3,) or np.linalg.norm(z) < 1e-9:
+        raise InputError(f"fingers/palm: expected two 3-vectors, got {fingers!r}, {palm!r}")
+    z = z / np.linalg.norm(z)
+    y = y - (y @ z) * z
+    if np.linalg.norm(y) < 1e-6:
+        raise InputError("fingers and palm directions are parallel")
+    y /= np.linalg.norm(y)
+    return np.column_stack([np.cross(y, z), y, z])
+
+
+def motion_from_spec(spec: dict, annotations: dict | None = None, postures: dict | None = None,
+                     where: str = "grasp") -> GraspMotion:
+    """A ``GraspMotion`` (object frame) from one parsed hand-written spec (module docstring)."""
+    if not isinstance(spec, dict):
+        raise InputError(f"{where}: expected a mapping")
+    unknown = sorted(set(spec) - _FIELDS)
+    if unknown:
+        raise InputError(f"{where}: unknown field(s) {unknown}; known: {sorted(_FIELDS)}")
+    anchor = np.zeros(3)
+    a = spec.get("anchor") or {}
+    if "region" in a:
+        regions = (annotations or {}).get("regions", {})
+        if a["region"] not in regions:
+            raise InputError(f"{where}.anchor: region {a['region']!r} not annotated; have {sorted(regions)}")
+        anchor = np.asarray(regions[a["region"]]["center"], float)
+    anchor = anchor + np.asarray(a.get("point", (0.0, 0.0, 0.0)), float)
+    g = spec.get("grasp")
+    if not isinstance(g, dict) or not {"position", "fingers", "palm"} <= set(g):
+        raise InputError(f"{where}.grasp: needs position, fingers and palm")
+    R = hand_rotation(g["fingers"], g["palm"])
+    X_grasp = np.eye(4)
+    X_grasp[:3, :3] = R
+    X_grasp[:3, 3] = anchor + np.asarray(g["position"], float)
+    X_pre = X_grasp.copy()
+    X_pre[:3, 3] -= float(spec.get("pregrasp_distance", 0.08)) * R[:, 1]
+    if postures is None:
+        from catgrasp_drake.robot.models import load_hand_postures
+
+        postures = load_hand_postures(spec.get("postures", spec.get("category")))
+    postures = {k: np.array(v, float) for k, v in postures.items()}
+    overrides = spec.get("posture_overrides") or {}
+    if overrides:
+        from catgrasp_drake.robot.models import HAND_ACTUATED_JOINTS
+
+        for name, joints in overrides.items():
+            if name not in postures:
+                raise InputError(f"{where}.posture_overrides: unknown posture {name!r}")
+            for joint, value in joints.items():
+                if joint not in HAND_ACTUATED_JOINTS:
+                    raise InputError(f"{where}.posture_overrides.{name}: unknown joint {joint!r}")
+                postures[name][HAND_ACTUATED_JOINTS.index(joint)] = float(value)
+    return GraspMotion(np.stack([X_pre, X_grasp]), ("pregrasp", "grasp"), postures, "object",
+                       float(spec.get("lift_height", 0.12)), float(spec.get("hold_time", 2.0)))
+
+
+def load_handwritten_motion(category: str, instance: str, path: str | Path | None = None) -> GraspMotion:
+    """The hand-written grasp of ``category`` fitted to ``instance``'s annotations (object frame)."""
+    from catgrasp_drake.data.dataset import load_annotations
+
+    path = Path(path) if path is not None else GRASPS_DIR / f"{category}_handwritten.yaml"
+    try:
+        spec = yaml.safe_load(path.read_text())
+    except OSError as e:
+        raise ModelFileError(f"{path}: cannot read hand-written grasp ({e})") from None
+    except yaml.YAMLError as e:
+        raise InputError(f"{path}: not valid YAML ({e})") from None
+    if isinstance(spec, dict) and spec.get("category", category) != category:
+        raise InputError(f"{path}: grasp for {spec.get('category')!r}, not {category!r}")
+    return motion_from_spec(spec, load_annotations(category, instance), where=str(path.name))

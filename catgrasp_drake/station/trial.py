@@ -1,0 +1,288 @@
+"""One grasp trial: plan, simulate approach -> reach -> close -> lift -> hold, judge.
+
+``run_grasp_trial(scenario, motion_O)`` places the object with the
+scenario's pose, expresses the motion (object frame) in the world, plans it
+(:func:`catgrasp_drake.systems.trajectory_generator.plan_grasp`), simulates
+it and judges it (:mod:`catgrasp_drake.station.judge`). It returns a frozen
+:class:`TrialResult` and never raises for a failed grasp: unreachable poses,
+collisions and simulation errors end up in ``failure_reason``/``detail``.
+
+The trial diagram (station + trajectory generator) is built once per
+scenario and process and reused (the plan is a context parameter), so the
+object and robot files are parsed once; with ``meshcat`` a fresh diagram is
+built (the visualizer belongs to it). Every trial starts from a fresh
+default context, so the same inputs give the same result.
+"""
+
+from __future__ import annotations
+
+import time
+from collections import OrderedDict
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+from pydrake.geometry import Meshcat
+from pydrake.systems.analysis import Simulator
+from pydrake.systems.framework import DiagramBuilder
+
+from catgrasp_drake.core.fileio import atomic_write_text
+from catgrasp_drake.errors import InputError
+from catgrasp_drake.grasping.motion import GraspMotion
+from catgrasp_drake.station.builder import StationHandles, add_station, posture_category
+from catgrasp_drake.station.judge import ContactRecord, JudgeSpec, Snapshot, Verdict, judge
+from catgrasp_drake.station.scenario import Scenario
+from catgrasp_drake.systems.trajectory_generator import (
+    GraspPlan,
+    GraspTrajectoryGenerator,
+    PlanParams,
+    hold_plan,
+    plan_grasp,
+)
+
+#: Hydroelastic patches contribute at most this many points (centroid + face centroids).
+MAX_POINTS_PER_PATCH = 64
+
+
+@dataclass(frozen=True)
+class TrialResult:
+    """Outcome of one grasp trial (see ``catgrasp_drake.station.judge`` for the rules)."""
+
+    scenario: str
+    category: str | None
+    instance: str | None
+    grasp_success: bool
+    functional_success: bool
+    failure_reason: str | None
+    detail: str
+    plan_status: str
+    timeline: dict
+    X_WO_initial: tuple
+    X_WO_final: tuple  # 4x4 as nested tuples
+    object_rise_m: float
+    object_tilt_deg: float
+    contacts_end: tuple  # ((body_a, body_b), ...) sorted, at the end of the hold
+    hand_links_on_object: tuple  # hand links touching the object at the end of the hold
+    sim_time_s: float
+    wall_time_s: float
+    plan_time_s: float
+
+    @property
+    def realtime_rate(self) -> float:
+        return self.sim_time_s / self.wall_time_s if self.wall_time_s > 0 else 0.0
+
+    def outcome(self) -> dict:
+        """Everything but the timings (deterministic for the same inputs)."""
+        d = asdict(self)
+        for k in ("wall_time_s", "plan_time_s"):
+            d.pop(k)
+        return d
+
+    def to_dict(self) -> dict:
+        d = asdict(self)
+        d["realtime_rate"] = self.realtime_rate
+        return d
+
+
+# ----------------------------------------------------------------------------- contacts
+def _body_name(plant, body) -> str:
+    return f"{plant.GetModelInstanceName(body.model_instance())}::{body.name()}"
+
+
+def contacts_from_results(plant, inspector, results) -> tuple[ContactRecord, ...]:
+    """ContactRecords (sorted by body names) from a ``ContactResults`` value."""
+    out = []
+    for i in range(results.num_hydroelastic_contacts()):
+        info = results.hydroelastic_contact_info(i)
+        s = info.contact_surface()
+        a = plant.GetBodyFromFrameId(inspector.GetFrameId(s.id_M()))
+        b = plant.GetBodyFromFrameId(inspector.GetFrameId(s.id_N()))
+        mesh = s.tri_mesh_W() if s.is_triangle() else s.poly_mesh_W()
+        n = mesh.num_elements()
+        idx = np.linspace(0, n - 1, min(n, MAX_POINTS_PER_PATCH - 1)).astype(int) if n else []
+        pts = [tuple(np.asarray(s.centroid(), float))] + [tuple(np.asarray(mesh.element_centroid(int(e)), float))
+                                                          for e in idx]
+        force = float(np.linalg.norm(info.F_Ac_W().translational()))
+        out.append(ContactRecord(_body_name(plant, a), _body_name(plant, b), tuple(pts), force, "hydroelastic"))
+    for i in range(results.num_point_pair_contacts()):
+        info = results.point_pair_contact_info(i)
+        a = plant.get_body(info.bodyA_index())
+        b = plant.get_body(info.bodyB_index())
+        out.append(ContactRecord(_body_name(plant, a), _body_name(plant, b),
+                                 (tuple(np.asarray(info.contact_point(), float)),),
+                                 float(np.linalg.norm(info.contact_force())), "point"))
+    # one orientation per pair, deterministic order
+    norm = []
+    for c in out:
+        if c.body_b < c.body_a:
+            c = ContactRecord(c.body_b, c.body_a, c.points_W, c.force_N, c.kind)
+        norm.append(c)
+    return tuple(sorted(norm, key=lambda c: (c.body_a, c.body_b, c.kind, -c.force_N)))
+
+
+# ----------------------------------------------------------------------------- trial diagram
+@dataclass
+class TrialDiagram:
+    """A built station + trajectory generator, reusable across trials of one scenario."""
+
+    diagram: object
+    station: StationHandles
+    generator: GraspTrajectoryGenerator
+    meshcat: Meshcat | None = None
+
+
+def build_trial_diagram(scenario: Scenario, meshcat: Meshcat | None = None) -> TrialDiagram:
+    """Station + ``GraspTrajectoryGenerator`` (holding the start pose until a plan is set)."""
+    from catgrasp_drake.robot.models import load_hand_postures
+
+    builder = DiagramBuilder()
+    h = add_station(builder, scenario, meshcat)
+    q_open = load_hand_postures(posture_category(scenario))["open"]
+    generator = builder.AddNamedSystem("grasp_trajectory", GraspTrajectoryGenerator(
+        h.plant, h.arm, h.hand, hold_plan(np.asarray(scenario.arm_q_home), q_open, "no plan")))
+    builder.Connect(generator.GetOutputPort("arm_desired_state"), h.plant.get_desired_state_input_port(h.arm))
+    builder.Connect(generator.GetOutputPort("hand_desired_state"), h.plant.get_desired_state_input_port(h.hand))
+    diagram = builder.Build()
+    diagram.set_name("grasp_trial")
+    return TrialDiagram(diagram, h, generator, meshcat)
+
+
+_CACHE: "OrderedDict[Scenario, TrialDiagram]" = OrderedDict()
+_CACHE_SIZE = 4
+
+
+def trial_diagram(scenario: Scenario, meshcat: Meshcat | None = None) -> TrialDiagram:
+    """The (per-process cached, when ``meshcat`` is None) trial diagram of ``scenario``."""
+    if meshcat is not None:
+        return build_trial_diagram(scenario, meshcat)
+    td = _CACHE.get(scenario)
+    if td is None:
+        td = build_trial_diagram(scenario)
+        _CACHE[scenario] = td
+        while len(_CACHE) > _CACHE_SIZE:
+            _CACHE.popitem(last=False)
+    else:
+        _CACHE.move_to_end(scenario)
+    return td
+
+
+def judge_spec(td: TrialDiagram, motion: GraspMotion) -> JudgeSpec:
+    from catgrasp_drake.robot.models import INDEX_DISTAL_LINK
+
+    h = td.station
+    plant = h.plant
+    scenario = h.scenario
+    regions = {}
+    if scenario.object.category is not None:
+        from catgrasp_drake.data.dataset import load_annotations
+
+        regions = load_annotations(scenario.object.category, scenario.object.instance).get("regions", {})
+    return JudgeSpec(
+        object_model=plant.GetModelInstanceName(h.object_instance),
+        hand_model=h.hand_name,
+        arm_model=h.arm_name,
+        table_model=plant.GetModelInstanceName(h.table),
+        index_distal_body=f"{h.hand_name}::{INDEX_DISTAL_LINK}",
+        category=scenario.object.category,
+        regions=regions,
+        lift_height=motion.lift_height,
+    )
+
+
+def plan_for(td: TrialDiagram, motion_W: GraspMotion, params: PlanParams = PlanParams()) -> GraspPlan:
+    """Plan ``motion_W`` (world frame) on a scratch context of the trial diagram."""
+    h = td.station
+    ctx = td.diagram.CreateDefaultContext()
+    plant_ctx = h.plant.GetMyMutableContextFromRoot(ctx)
+    sg_ctx = h.scene_graph.GetMyMutableContextFromRoot(ctx)
+    q_arm_start = np.asarray(h.scenario.arm_q_home, float)
+    return plan_grasp(h.plant, plant_ctx, h.scene_graph, sg_ctx, arm=h.arm, hand=h.hand,
+                      object_instance=h.object_instance, table=h.table, motion_W=motion_W,
+                      q_arm_start=q_arm_start, params=params)
+
+
+# ----------------------------------------------------------------------------- the trial
+def _snapshot(td: TrialDiagram, context) -> Snapshot:
+    h = td.station
+    plant_ctx = h.plant.GetMyContextFromRoot(context)
+    X_WO = h.plant.EvalBodyPoseInWorld(plant_ctx, h.object_body).GetAsMatrix4()
+    results = h.plant.get_contact_results_output_port().Eval(plant_ctx)
+    contacts = contacts_from_results(h.plant, h.scene_graph.model_inspector(), results)
+    return Snapshot(context.get_time(), X_WO, contacts)
+
+
+def _as_tuple(X: np.ndarray) -> tuple:
+    return tuple(tuple(round(float(v), 9) for v in row) for row in np.asarray(X))
+
+
+def run_grasp_trial(scenario: Scenario, motion_O: GraspMotion, *, meshcat: Meshcat | None = None,
+                    record_html: str | Path | None = None, params: PlanParams = PlanParams()) -> TrialResult:
+    """Execute ``motion_O`` (hand control poses in the OBJECT frame) on the scenario's object.
+
+    With ``meshcat`` the run is recorded on it (MeshcatVisualizer recording);
+    with ``record_html`` as well, the recording is written there as one
+    self-contained HTML file. Returns a :class:`TrialResult`; never raises
+    for a failed grasp.
+    """
+    if not isinstance(motion_O, GraspMotion):
+        raise InputError(f"motion_O: expected a GraspMotion, got {type(motion_O).__name__}")
+    if motion_O.frame != "object":
+        raise InputError("motion_O: expected poses in the object frame (GraspMotion.frame == 'object')")
+    if record_html is not None and meshcat is None:
+        raise InputError("record_html needs a meshcat (the recording is made on it)")
+    wall0 = time.perf_counter()
+    td = trial_diagram(scenario, meshcat)
+    X_WO0 = scenario.X_WO()
+    motion_W = motion_O.in_world(X_WO0)
+    spec = judge_spec(td, motion_O)
+    plan = plan_for(td, motion_W, params)
+
+    def result(verdict: Verdict, X_final, snapshot_end: Snapshot | None, sim_time: float) -> TrialResult:
+        contacts = snapshot_end.contacts if snapshot_end else ()
+        pairs = tuple(sorted({(c.body_a, c.body_b) for c in contacts}))
+        hand_links = tuple(sorted({c.other(spec.object_model).split("::", 1)[1] for c in contacts
+                                   if c.involves(spec.object_model) and c.involves(spec.hand_model)}))
+        return TrialResult(
+            scenario=scenario.name, category=scenario.object.category, instance=scenario.object.instance,
+            grasp_success=verdict.grasp_success, functional_success=verdict.functional_success,
+            failure_reason=verdict.failure_reason, detail=verdict.detail, plan_status=plan.status,
+            timeline=plan.timeline.as_dict(), X_WO_initial=_as_tuple(X_WO0), X_WO_final=_as_tuple(X_final),
+            object_rise_m=round(verdict.object_rise_m, 9), object_tilt_deg=round(verdict.tilt_deg, 6),
+            contacts_end=pairs, hand_links_on_object=hand_links, sim_time_s=sim_time,
+            wall_time_s=time.perf_counter() - wall0, plan_time_s=plan.solve_time_s)
+
+    if not plan.ok:
+        reason = "collision_before_closing" if plan.failure_kind == "collision" else "unreachable"
+        return result(Verdict(False, False, reason, plan.status), X_WO0, None, 0.0)
+
+    context = td.diagram.CreateDefaultContext()
+    td.generator.set_plan(td.generator.GetMyMutableContextFromRoot(context), plan)
+    simulator = Simulator(td.diagram, context)
+    simulator.set_target_realtime_rate(0.0)
+    visualizer = td.station.meshcat_visualizer
+    if visualizer is not None:
+        visualizer.DeleteRecording()
+        visualizer.StartRecording(False)
+    tl = plan.timeline
+    try:
+        simulator.Initialize()
+        initial = _snapshot(td, context)
+        simulator.AdvanceTo(tl.close)
+        before_close = _snapshot(td, context)
+        simulator.AdvanceTo(tl.hold)
+        after_lift = _snapshot(td, context)
+        simulator.AdvanceTo(tl.end)
+        end = _snapshot(td, context)
+    except RuntimeError as e:  # a solver failure inside the plant: report, never raise
+        X = td.station.plant.EvalBodyPoseInWorld(td.station.plant.GetMyContextFromRoot(context),
+                                                 td.station.object_body).GetAsMatrix4()
+        return result(Verdict(False, False, "simulation_error", str(e).splitlines()[0][:200]), X, None,
+                      context.get_time())
+    finally:
+        if visualizer is not None:
+            visualizer.StopRecording()
+            visualizer.PublishRecording()
+            if record_html is not None:
+                atomic_write_text(record_html, meshcat.StaticHtml())
+    verdict = judge(spec, initial, before_close, after_lift, end)
+    return result(verdict, end.X_WO, end, context.get_time())

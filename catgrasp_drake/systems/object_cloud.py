@@ -1,0 +1,162 @@
+"""The object's point cloud in the world frame from a depth camera's images.
+
+Segmentation by the object's render label, optional Gaussian depth noise
+(explicit seed), back-projection with Drake's ``DepthImageToPointCloud``,
+cropping to a workspace box and voxel-grid down-sampling. The maths lives in
+the private pure functions ``_mask_depth`` and ``_crop_and_voxelize``; the
+systems only move data between ports and arrays.
+
+Outputs are computed on demand and cached by Drake: nothing is rendered or
+projected while the simulation steps unless something evaluates the port,
+and a second evaluation with unchanged inputs reuses the cached cloud.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from pydrake.common.value import AbstractValue
+from pydrake.perception import BaseField, DepthImageToPointCloud, Fields, PointCloud
+from pydrake.systems.framework import Diagram, DiagramBuilder, LeafSystem
+from pydrake.systems.sensors import CameraInfo, ImageDepth32F, ImageLabel16I, PixelType
+
+from catgrasp_drake.errors import InputError
+
+
+# ----------------------------------------------------------------------------- pure maths
+def _mask_depth(depth: np.ndarray, label: np.ndarray, object_label: int,
+                noise_std: float = 0.0, rng: np.random.Generator | None = None) -> np.ndarray:
+    """Depth (H, W) in metres with every pixel not labelled ``object_label`` set to NaN.
+
+    With ``noise_std`` > 0, zero-mean Gaussian noise (metres, std ``noise_std``)
+    drawn from ``rng`` is added to the kept pixels' depth.
+    """
+    out = np.where(label == object_label, depth, np.nan).astype(np.float32)
+    if noise_std > 0:
+        if rng is None:
+            raise InputError("_mask_depth: noise needs an explicit random generator")
+        keep = np.isfinite(out)
+        out[keep] += rng.normal(0.0, noise_std, size=int(keep.sum())).astype(np.float32)
+    return out
+
+
+def _voxel_downsample(points: np.ndarray, voxel_size: float) -> np.ndarray:
+    """Mean of the points in each occupied voxel (cubes of edge ``voxel_size``), sorted by voxel."""
+    if voxel_size <= 0 or len(points) == 0:
+        return points
+    keys = np.floor(points / voxel_size).astype(np.int64)
+    _, inverse, counts = np.unique(keys, axis=0, return_inverse=True, return_counts=True)
+    inverse = inverse.reshape(-1)
+    sums = np.zeros((len(counts), 3))
+    np.add.at(sums, inverse, points)
+    return sums / counts[:, None]
+
+
+def _crop_and_voxelize(p_W: np.ndarray, lower: np.ndarray, upper: np.ndarray, voxel_size: float) -> np.ndarray:
+    """Finite points of ``p_W`` (N, 3) inside the box [lower, upper], voxel-down-sampled."""
+    p = p_W[np.all(np.isfinite(p_W), axis=1)]
+    p = p[np.all((p >= lower) & (p <= upper), axis=1)]
+    return _voxel_downsample(p, voxel_size)
+
+
+def points_from_cloud(cloud: PointCloud) -> np.ndarray:
+    """A Drake ``PointCloud``'s finite xyz as an ``(N, 3)`` float64 array."""
+    p = np.asarray(cloud.xyzs(), dtype=np.float64).T
+    return np.ascontiguousarray(p[np.all(np.isfinite(p), axis=1)])
+
+
+def cloud_from_points(points: np.ndarray) -> PointCloud:
+    """An ``(N, 3)`` array as a Drake ``PointCloud`` with xyz only."""
+    cloud = PointCloud(len(points), Fields(BaseField.kXYZs))
+    cloud.mutable_xyzs()[:] = np.asarray(points, np.float32).T
+    return cloud
+
+
+# ----------------------------------------------------------------------------- systems
+class LabelDepthMask(LeafSystem):
+    """Keeps the depth pixels of one render label (NaN elsewhere), with optional depth noise.
+
+    Input ports:
+        depth_image: ``ImageDepth32F`` (metres).
+        label_image: ``ImageLabel16I`` of the same size.
+    Output ports:
+        depth_image: ``ImageDepth32F``, NaN off the object; noise, if any, is
+            drawn from ``numpy.random.default_rng([seed, round(t * 1e6)])`` so
+            a given time always gives the same noise.
+    """
+
+    def __init__(self, width: int, height: int, object_label: int, *, noise_std: float = 0.0, seed: int = 0):
+        super().__init__()
+        if noise_std < 0:
+            raise InputError(f"noise_std: expected >= 0, got {noise_std}")
+        self._object_label = int(object_label)
+        self._noise_std = float(noise_std)
+        self._seed = int(seed)
+        self._depth_in = self.DeclareAbstractInputPort("depth_image", AbstractValue.Make(ImageDepth32F(width, height)))
+        self._label_in = self.DeclareAbstractInputPort("label_image", AbstractValue.Make(ImageLabel16I(width, height)))
+        self.DeclareAbstractOutputPort("depth_image", lambda: AbstractValue.Make(ImageDepth32F(width, height)),
+                                       self._calc)
+
+    def _calc(self, context, output):
+        depth = self._depth_in.Eval(context).data[:, :, 0]
+        label = self._label_in.Eval(context).data[:, :, 0]
+        rng = None
+        if self._noise_std > 0:
+            rng = np.random.default_rng([self._seed, int(round(context.get_time() * 1e6))])
+        image = output.get_mutable_value()
+        image.mutable_data[:, :, 0] = _mask_depth(depth, label, self._object_label, self._noise_std, rng)
+
+
+class CloudCropVoxel(LeafSystem):
+    """Drops non-finite points, crops to a box and voxel-down-samples a point cloud.
+
+    Input ports:
+        point_cloud: ``PointCloud`` (xyz, metres, any frame F).
+    Output ports:
+        point_cloud: ``PointCloud`` in F.
+    """
+
+    def __init__(self, crop_min, crop_max, voxel_size: float):
+        super().__init__()
+        self._lower = np.asarray(crop_min, float)
+        self._upper = np.asarray(crop_max, float)
+        self._voxel = float(voxel_size)
+        self._in = self.DeclareAbstractInputPort("point_cloud", AbstractValue.Make(PointCloud()))
+        self.DeclareAbstractOutputPort("point_cloud", lambda: AbstractValue.Make(PointCloud()), self._calc)
+
+    def _calc(self, context, output):
+        p = np.asarray(self._in.Eval(context).xyzs(), np.float64).T
+        output.set_value(cloud_from_points(_crop_and_voxelize(p, self._lower, self._upper, self._voxel)))
+
+
+class ObjectCloudSystem(Diagram):
+    """The object's segmented point cloud in the world frame W from one depth camera C.
+
+    ``LabelDepthMask`` -> Drake ``DepthImageToPointCloud`` -> ``CloudCropVoxel``.
+
+    Input ports:
+        depth_image: ``ImageDepth32F``, metres along the camera's z (RgbdSensor ``depth_image_32f``).
+        label_image: ``ImageLabel16I`` (RgbdSensor ``label_image``).
+        camera_pose: ``RigidTransform`` X_WC (RgbdSensor ``body_pose_in_world``
+            when the sensor's camera frame is its body frame).
+    Output ports:
+        object_cloud_W: ``PointCloud`` (xyz, metres, world frame), pixels
+            labelled ``object_label`` only, cropped to [crop_min, crop_max]
+            (W), averaged per voxel of ``voxel_size`` (0 = no down-sampling).
+    """
+
+    def __init__(self, camera_info: CameraInfo, object_label: int, *, crop_min=(-10.0,) * 3,
+                 crop_max=(10.0,) * 3, voxel_size: float = 0.005, noise_std: float = 0.0, seed: int = 0):
+        super().__init__()
+        builder = DiagramBuilder()
+        mask = builder.AddNamedSystem("mask", LabelDepthMask(camera_info.width(), camera_info.height(), object_label,
+                                                             noise_std=noise_std, seed=seed))
+        to_cloud = builder.AddNamedSystem("to_cloud", DepthImageToPointCloud(
+            camera_info, PixelType.kDepth32F, 1.0, BaseField.kXYZs))
+        crop = builder.AddNamedSystem("crop", CloudCropVoxel(crop_min, crop_max, voxel_size))
+        builder.Connect(mask.get_output_port(), to_cloud.GetInputPort("depth_image"))
+        builder.Connect(to_cloud.get_output_port(), crop.get_input_port())
+        builder.ExportInput(mask.GetInputPort("depth_image"), "depth_image")
+        builder.ExportInput(mask.GetInputPort("label_image"), "label_image")
+        builder.ExportInput(to_cloud.GetInputPort("camera_pose"), "camera_pose")
+        builder.ExportOutput(crop.get_output_port(), "object_cloud_W")
+        builder.BuildInto(self)

@@ -1,0 +1,490 @@
+"""Grasp execution: plan arm/hand joint trajectories for a ``GraspMotion`` and play them back.
+
+Planning (:func:`plan_grasp`) runs once per trial, before the simulation,
+with Drake's ``InverseKinematics`` (SNOPT when available) on the station's
+plant and a scratch context of the station diagram:
+
+- ``home -> pregrasp``: joint-space cubic from the arm's start configuration
+  to the IK solution of the pregrasp pose, solved with a minimum-distance
+  constraint between the robot and the environment (table, object) where
+  feasible; if sampled configurations along the path collide, the path goes
+  through a via pose ``via_height`` above the pregrasp pose.
+- ``reach``: pregrasp -> grasp on a straight line (position interpolated,
+  orientation slerped), ``reach_knots`` IK knots, each seeded from the
+  previous solution so the arm stays on one branch; robot vs table kept
+  apart.
+- ``close``: the arm holds; the hand goes preshape -> closed (the PD-gained,
+  effort-limited hand actuators close compliantly on the object).
+- ``lift``: straight up by ``lift_height`` in ``lift_knots`` IK knots.
+- ``hold``: constant for ``hold_time`` (+ ``hold_margin``).
+
+The hand goes ``open -> preshape`` during the approach.
+
+A plan that cannot be made is REPORTED in ``GraspPlan.status``
+(``"unreachable: pregrasp"``, ``"ik_failed: grasp"``,
+``"collision: pregrasp"``, ``"branch_flip: reach"`` ...); the generator then
+holds the start configuration with the hand open. Nothing raises into the
+simulation.
+
+:class:`GraspTrajectoryGenerator` is the LeafSystem that plays a plan back;
+the plan is an abstract *parameter*, so one built diagram serves any number
+of trials (``set_plan(context, plan)``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from pydrake.common.value import AbstractValue
+from pydrake.geometry import CollisionFilterDeclaration, GeometrySet, Role
+from pydrake.math import RigidTransform, RotationMatrix
+from pydrake.multibody.inverse_kinematics import InverseKinematics
+from pydrake.multibody.plant import MultibodyPlant
+from pydrake.multibody.tree import ModelInstanceIndex
+from pydrake.solvers import SnoptSolver, Solve
+from pydrake.trajectories import PiecewisePolynomial
+from pydrake.systems.framework import BasicVector, LeafSystem
+
+from catgrasp_drake.errors import InputError
+from catgrasp_drake.grasping.motion import GraspMotion
+
+PHASES = ("settle", "approach", "reach", "close", "lift", "hold", "end")
+
+
+@dataclass(frozen=True)
+class PlanParams:
+    """Timing (s), tolerances (m, rad) and knot counts of the grasp execution."""
+
+    settle_time: float = 0.1
+    min_approach_time: float = 1.2
+    max_joint_speed: float = 1.2  # rad/s, sets the approach duration
+    reach_time: float = 0.8
+    close_time: float = 0.8
+    close_dwell: float = 0.3
+    lift_time: float = 1.0
+    hold_margin: float = 0.1
+    reach_knots: int = 5
+    lift_knots: int = 5
+    position_tol: float = 1e-3
+    orientation_tol: float = 0.01
+    min_distance: float = 0.005  # robot vs environment at home->pregrasp
+    via_height: float = 0.15
+    max_reach: float = 1.35  # m, shoulder to hand base; beyond -> "unreachable"
+    max_knot_jump: float = 0.6  # rad between consecutive knots; above -> "branch_flip"
+    wrist_clearance: float = 0.08  # m, wrist-1 origin above the hand base at pregrasp/grasp (if feasible)
+
+
+@dataclass(frozen=True)
+class Timeline:
+    """Phase start times (s); ``end`` is when the hold is over."""
+
+    settle: float = 0.0
+    approach: float = 0.0
+    reach: float = 0.0
+    close: float = 0.0
+    lift: float = 0.0
+    hold: float = 0.0
+    end: float = 0.0
+
+    def as_dict(self) -> dict:
+        return {p: getattr(self, p) for p in PHASES}
+
+
+@dataclass(frozen=True, eq=False)
+class GraspPlan:
+    """Joint-space knots of a grasp execution (or the reason there are none).
+
+    ``times`` (M,), ``q_arm`` (M, 6) in ``ARM_JOINTS`` order, ``q_hand`` (M, 9)
+    in ``HAND_ACTUATED_JOINTS`` order; the arm is interpolated with a
+    shape-preserving cubic, the hand linearly.
+    """
+
+    status: str
+    timeline: Timeline
+    times: np.ndarray
+    q_arm: np.ndarray
+    q_hand: np.ndarray
+    knot_names: tuple[str, ...] = ()
+    solve_time_s: float = 0.0
+
+    @property
+    def ok(self) -> bool:
+        return self.status == "ok"
+
+    @property
+    def failure_kind(self) -> str | None:
+        """``None`` when ok, else the status up to the colon (``unreachable``, ``ik_failed`` ...)."""
+        return None if self.ok else self.status.split(":")[0]
+
+    def arm_trajectory(self) -> PiecewisePolynomial:
+        if len(self.times) < 2:
+            return PiecewisePolynomial(self.q_arm[0][:, None])
+        return PiecewisePolynomial.CubicShapePreserving(self.times, self.q_arm.T, True)
+
+    def hand_trajectory(self) -> PiecewisePolynomial:
+        if len(self.times) < 2:
+            return PiecewisePolynomial(self.q_hand[0][:, None])
+        return PiecewisePolynomial.FirstOrderHold(self.times, self.q_hand.T)
+
+
+def hold_plan(q_arm: np.ndarray, q_hand: np.ndarray, status: str, duration: float = 0.0) -> GraspPlan:
+    """A plan that holds one configuration (used for failures and as the default)."""
+    q_arm = np.asarray(q_arm, float)[None]
+    q_hand = np.asarray(q_hand, float)[None]
+    return GraspPlan(status, Timeline(end=duration), np.zeros(1), q_arm, q_hand, ("start",))
+
+
+# ----------------------------------------------------------------------------- IK helpers
+@dataclass
+class _Ctx:
+    plant: MultibodyPlant
+    plant_context: object
+    sg_context: object
+    scene_graph: object
+    arm_q_idx: np.ndarray  # indices into plant q of the arm joints (ARM_JOINTS order)
+    hand_q_idx: np.ndarray  # indices of the hand's actuated joints (HAND_ACTUATED_JOINTS order)
+    frame_H: object
+    frame_wrist: object  # body frame of the arm's wrist-1 link
+    q_full: np.ndarray  # the fixed configuration of everything but the arm
+    robot_geoms: GeometrySet
+    object_geoms: GeometrySet
+    table_geoms: GeometrySet
+    shoulder_W: np.ndarray
+
+
+def _geometry_set(plant: MultibodyPlant, scene_graph, instances) -> GeometrySet:
+    inspector = scene_graph.model_inspector()
+    ids = []
+    for inst in instances:
+        for bi in plant.GetBodyIndices(inst):
+            fid = plant.GetBodyFrameIdIfExists(bi)
+            if fid is None:
+                continue
+            ids += list(inspector.GetGeometries(fid, Role.kProximity))
+    return GeometrySet(ids)
+
+
+def _ik(c: _Ctx, X_WH: RigidTransform, q_seed_arm: np.ndarray, params: PlanParams,
+        min_distance: float | None = None, wrist_up: bool = False) -> tuple[bool, np.ndarray]:
+    """Arm joint angles putting frame H at ``X_WH``; everything else fixed at ``c.q_full``.
+
+    ``wrist_up`` keeps the wrist-1 body's origin ``wrist_clearance`` above H
+    (forearm and wrist stay above a hand working low over the table).
+    """
+    plant = c.plant
+    ik = InverseKinematics(plant, c.plant_context, with_joint_limits=True)
+    q = ik.q()
+    prog = ik.get_mutable_prog()
+    others = np.setdiff1d(np.arange(plant.num_positions()), c.arm_q_idx)
+    prog.AddBoundingBoxConstraint(c.q_full[others], c.q_full[others], q[others])
+    p = X_WH.translation()
+    tol = params.position_tol
+    ik.AddPositionConstraint(c.frame_H, np.zeros(3), plant.world_frame(), p - tol, p + tol)
+    ik.AddOrientationConstraint(plant.world_frame(), X_WH.rotation(), c.frame_H, RotationMatrix(),
+                                params.orientation_tol)
+    if wrist_up:
+        ik.AddPositionConstraint(c.frame_wrist, np.zeros(3), plant.world_frame(),
+                                 [-np.inf, -np.inf, p[2] + params.wrist_clearance], [np.inf] * 3)
+    if min_distance is not None:
+        ik.AddMinimumDistanceLowerBoundConstraint(min_distance, 0.05)
+    q_guess = c.q_full.copy()
+    q_guess[c.arm_q_idx] = q_seed_arm
+    prog.SetInitialGuess(q, q_guess)
+    solver = SnoptSolver()
+    result = solver.Solve(prog) if solver.available() and solver.enabled() else Solve(prog)
+    if not result.is_success():
+        return False, q_seed_arm
+    return True, np.asarray(result.GetSolution(q))[c.arm_q_idx]
+
+
+def _ik_continuous(c: _Ctx, X_WH: RigidTransform, q_prev: np.ndarray, params: PlanParams) -> tuple[bool, np.ndarray]:
+    """IK seeded from the previous knot; the first solution (wrist up, then free) that stays on its branch."""
+    best = (False, q_prev)
+    for wrist_up in (True, False):
+        ok, q = _ik(c, X_WH, q_prev, params, wrist_up=wrist_up)
+        if ok and np.abs(q - q_prev).max() <= params.max_knot_jump:
+            return True, q
+        if ok and not best[0]:
+            best = (True, q)
+    return best
+
+
+def _collisions(c: _Ctx, q_arm: np.ndarray, margin: float = 0.0) -> list[str]:
+    """Pairs "A vs B" (frame names) of unfiltered geometries closer than ``margin`` at ``q_arm``."""
+    q = c.q_full.copy()
+    q[c.arm_q_idx] = q_arm
+    c.plant.SetPositions(c.plant_context, q)
+    query = c.scene_graph.get_query_output_port().Eval(c.sg_context)
+    inspector = query.inspector()
+    out = []
+    for pair in query.ComputeSignedDistancePairwiseClosestPoints(max(margin, 0.0) + 1e-4):
+        if pair.distance < margin:
+            a, b = (inspector.GetName(inspector.GetFrameId(g)) for g in (pair.id_A, pair.id_B))
+            out.append(f"{a} vs {b}")
+    return sorted(out)
+
+
+def _robot_collides(c: _Ctx, q_arm: np.ndarray, margin: float = 0.0) -> bool:
+    """Any robot geometry closer than ``margin`` to the table or object at ``q_arm``."""
+    return bool(_collisions(c, q_arm, margin))
+
+
+def _interp_poses(X_A: RigidTransform, X_B: RigidTransform, n: int) -> list[RigidTransform]:
+    """``n`` poses from A (exclusive) to B (inclusive): linear position, slerped rotation."""
+    qa, qb = X_A.rotation().ToQuaternion(), X_B.rotation().ToQuaternion()
+    out = []
+    for s in np.linspace(0.0, 1.0, n + 1)[1:]:
+        R = RotationMatrix(qa.slerp(s, qb))
+        out.append(RigidTransform(R, (1 - s) * X_A.translation() + s * X_B.translation()))
+    return out
+
+
+# ----------------------------------------------------------------------------- planner
+def plan_grasp(plant: MultibodyPlant, plant_context, scene_graph, sg_context, *, arm: ModelInstanceIndex,
+               hand: ModelInstanceIndex, object_instance: ModelInstanceIndex, table: ModelInstanceIndex,
+               motion_W: GraspMotion, q_arm_start, params: PlanParams = PlanParams()) -> GraspPlan:
+    """Plan the joint trajectories executing ``motion_W`` (poses in the WORLD frame).
+
+    ``plant_context``/``sg_context`` must be a SCRATCH context of the diagram
+    holding ``plant`` and ``scene_graph`` (its positions and collision
+    filters are modified). Never raises for unreachable or colliding poses:
+    the returned plan's ``status`` says what failed.
+    """
+    import time
+
+    from catgrasp_drake.robot.models import ARM_JOINTS, HAND_ACTUATED_JOINTS, HAND_BASE_LINK
+    from catgrasp_drake.station.builder import hand_joint_angles
+
+    if not isinstance(motion_W, GraspMotion) or motion_W.frame != "world":
+        raise InputError("plan_grasp: needs a GraspMotion in the world frame (motion.in_world(X_WO))")
+    t_start = time.perf_counter()
+    q_arm_start = np.asarray(q_arm_start, float)
+    postures = motion_W.postures
+    q_open, q_pre, q_closed = (np.asarray(postures[k]) for k in ("open", "preshape", "closed"))
+
+    def fail(status: str) -> GraspPlan:
+        p = hold_plan(q_arm_start, q_open, status)
+        return GraspPlan(p.status, p.timeline, p.times, p.q_arm, p.q_hand, p.knot_names,
+                         time.perf_counter() - t_start)
+
+    arm_q_idx = np.array([plant.GetJointByName(n, arm).position_start() for n in ARM_JOINTS])
+    hand_q_idx = np.array([plant.GetJointByName(n, hand).position_start() for n in HAND_ACTUATED_JOINTS])
+    q_full = np.asarray(plant.GetPositions(plant_context), float).copy()
+    # the hand in preshape, mimic followers consistent (IK enforces the plant's coupler constraints)
+    for name, angle in hand_joint_angles(q_pre).items():
+        q_full[plant.GetJointByName(name, hand).position_start()] = angle
+    frame_H = plant.GetFrameByName(HAND_BASE_LINK, hand)
+    shoulder = plant.GetJointByName(ARM_JOINTS[1], arm).frame_on_child()
+    q_tmp = q_full.copy()
+    q_tmp[arm_q_idx] = q_arm_start
+    plant.SetPositions(plant_context, q_tmp)
+    shoulder_W = shoulder.CalcPoseInWorld(plant_context).translation()
+    frame_wrist = plant.GetJointByName(ARM_JOINTS[3], arm).child_body().body_frame()
+    c = _Ctx(plant, plant_context, sg_context, scene_graph, arm_q_idx, hand_q_idx, frame_H, frame_wrist, q_full,
+             _geometry_set(plant, scene_graph, [arm, hand]), _geometry_set(plant, scene_graph, [object_instance]),
+             _geometry_set(plant, scene_graph, [table]), shoulder_W)
+
+    # Planning-only collision filters: robot vs itself and object vs table never count.
+    manager = scene_graph.collision_filter_manager(sg_context)
+    manager.Apply(CollisionFilterDeclaration().ExcludeWithin(c.robot_geoms)
+                  .ExcludeBetween(c.object_geoms, c.table_geoms))
+
+    X = {name: RigidTransform(motion_W.pose(name)) for name in ("pregrasp", "grasp")}
+    for name, X_WH in X.items():
+        if np.linalg.norm(X_WH.translation() - shoulder_W) > params.max_reach:
+            return fail(f"unreachable: {name}")
+
+    # --- pregrasp: wrist up if feasible; collision-free (min-distance IK) if the first solution collides
+    ok, q_pre_arm = _ik(c, X["pregrasp"], q_arm_start, params, wrist_up=True)
+    if not ok:
+        ok, q_pre_arm = _ik(c, X["pregrasp"], q_arm_start, params)
+    if not ok:
+        return fail("ik_failed: pregrasp")
+    if _robot_collides(c, q_pre_arm):
+        ok, q_free = _ik(c, X["pregrasp"], q_pre_arm, params, min_distance=params.min_distance)
+        if not ok or _robot_collides(c, q_free):
+            return fail(f"collision: pregrasp ({'; '.join(_collisions(c, q_pre_arm)[:3])})")
+        q_pre_arm = q_free
+
+    # --- home -> pregrasp: check samples, else go through a via pose above the pregrasp
+    approach_knots = [q_pre_arm]
+    samples = [q_arm_start + s * (q_pre_arm - q_arm_start) for s in np.linspace(0.1, 0.9, 9)]
+    if any(_robot_collides(c, q) for q in samples):
+        X_via = RigidTransform(X["pregrasp"].rotation(), X["pregrasp"].translation() + [0, 0, params.via_height])
+        ok_via, q_via = _ik(c, X_via, q_pre_arm, params, min_distance=params.min_distance)
+        if ok_via:
+            approach_knots = [q_via, q_pre_arm]
+
+    # --- reach: straight line pregrasp -> grasp, robot vs table only
+    id_obj = manager.ApplyTransient(CollisionFilterDeclaration().ExcludeBetween(c.robot_geoms, c.object_geoms))
+    reach = []
+    q_prev = q_pre_arm
+    for k, X_WH in enumerate(_interp_poses(X["pregrasp"], X["grasp"], params.reach_knots)):
+        ok, q_k = _ik_continuous(c, X_WH, q_prev, params)
+        last = k == params.reach_knots - 1
+        if not ok:
+            manager.RemoveDeclaration(id_obj)
+            return fail("ik_failed: grasp" if last else "ik_failed: reach")
+        if np.abs(q_k - q_prev).max() > params.max_knot_jump:
+            manager.RemoveDeclaration(id_obj)
+            return fail("branch_flip: reach")
+        reach.append(q_k)
+        q_prev = q_k
+    q_grasp = reach[-1]
+    collides = _collisions(c, q_grasp, margin=-0.003)  # > 3 mm into the table
+    manager.RemoveDeclaration(id_obj)
+    if collides:
+        return fail(f"collision: grasp ({'; '.join(collides[:3])})")
+
+    # --- lift: straight up (object attached; no collision constraints)
+    X_lift = RigidTransform(X["grasp"].rotation(), X["grasp"].translation() + [0, 0, motion_W.lift_height])
+    lift = []
+    q_prev = q_grasp
+    for X_WH in _interp_poses(X["grasp"], X_lift, params.lift_knots):
+        ok, q_k = _ik_continuous(c, X_WH, q_prev, params)
+        if not ok:
+            return fail("ik_failed: lift")
+        if np.abs(q_k - q_prev).max() > params.max_knot_jump:
+            return fail("branch_flip: lift")
+        lift.append(q_k)
+        q_prev = q_k
+
+    # --- timeline and knots
+    path = np.vstack([q_arm_start] + approach_knots)
+    t_approach_dur = max(params.min_approach_time,
+                         float(np.abs(np.diff(path, axis=0)).sum(axis=0).max()) / params.max_joint_speed)
+    tl = {}
+    times, qa, qh, names = [], [], [], []
+
+    def knot(t, q_arm, q_hand, name):
+        times.append(t)
+        qa.append(np.asarray(q_arm, float))
+        qh.append(np.asarray(q_hand, float))
+        names.append(name)
+
+    t = 0.0
+    tl["settle"] = t
+    knot(t, q_arm_start, q_open, "start")
+    t += params.settle_time
+    tl["approach"] = t
+    knot(t, q_arm_start, q_open, "approach")
+    n_app = len(approach_knots)
+    for i, q in enumerate(approach_knots):
+        knot(t + t_approach_dur * (i + 1) / n_app, q, q_open + (q_pre - q_open) * (i + 1) / n_app,
+             "via" if i < n_app - 1 else "pregrasp")
+    t += t_approach_dur
+    tl["reach"] = t
+    for i, q in enumerate(reach):
+        knot(t + params.reach_time * (i + 1) / len(reach), q, q_pre, "grasp" if i == len(reach) - 1 else "reach")
+    t += params.reach_time
+    tl["close"] = t
+    knot(t + params.close_time, q_grasp, q_closed, "closed")
+    t += params.close_time + params.close_dwell
+    knot(t, q_grasp, q_closed, "closed_dwell")
+    tl["lift"] = t
+    for i, q in enumerate(lift):
+        knot(t + params.lift_time * (i + 1) / len(lift), q, q_closed, "lifted" if i == len(lift) - 1 else "lift")
+    t += params.lift_time
+    tl["hold"] = t
+    t += motion_W.hold_time + params.hold_margin
+    knot(t, lift[-1], q_closed, "end")
+    tl["end"] = t
+    return GraspPlan("ok", Timeline(**tl), np.array(times), np.array(qa), np.array(qh), tuple(names),
+                     time.perf_counter() - t_start)
+
+
+# ----------------------------------------------------------------------------- system
+def _actuator_order(plant: MultibodyPlant, instance: ModelInstanceIndex, joint_names) -> np.ndarray:
+    """perm such that x_actuators = x_named[perm] (actuator order of the instance)."""
+    names = list(joint_names)
+    perm = []
+    for ai in plant.GetJointActuatorIndices(instance):
+        jname = plant.get_joint_actuator(ai).joint().name()
+        if jname not in names:
+            raise InputError(f"actuated joint {jname!r} is not in the joint list {names}")
+        perm.append(names.index(jname))
+    return np.array(perm, int)
+
+
+class GraspTrajectoryGenerator(LeafSystem):
+    """Plays back a :class:`GraspPlan` as desired states of the PD-gained actuators.
+
+    Parameters (abstract):
+        plan: the ``GraspPlan`` (``set_plan(context, plan)``; default: the
+            plan given at construction).
+    Output ports:
+        arm_desired_state: [q; v] (2 * 6) of the arm, actuator order, rad and rad/s.
+        hand_desired_state: [q; v] (2 * 9) of the hand's actuated joints, actuator order.
+        plan_status: str, ``"ok"`` or the planning failure.
+    Before ``plan.times[0]`` and after ``plan.times[-1]`` the end values are held (zero velocity).
+    """
+
+    def __init__(self, plant: MultibodyPlant, arm: ModelInstanceIndex, hand: ModelInstanceIndex,
+                 default_plan: GraspPlan):
+        super().__init__()
+        from catgrasp_drake.robot.models import ARM_JOINTS, HAND_ACTUATED_JOINTS
+
+        self._arm_perm = _actuator_order(plant, arm, ARM_JOINTS)
+        self._hand_perm = _actuator_order(plant, hand, HAND_ACTUATED_JOINTS)
+        self._plan_index = self.DeclareAbstractParameter(AbstractValue.Make(_PlanCache(default_plan)))
+        na, nh = len(self._arm_perm), len(self._hand_perm)
+        self.DeclareVectorOutputPort("arm_desired_state", 2 * na, self._calc_arm)
+        self.DeclareVectorOutputPort("hand_desired_state", 2 * nh, self._calc_hand)
+        self.DeclareAbstractOutputPort("plan_status", lambda: AbstractValue.Make(""), self._calc_status,
+                                       prerequisites_of_calc={self.all_parameters_ticket()})
+
+    def set_plan(self, context, plan: GraspPlan) -> None:
+        """Use ``plan`` in ``context`` (this system's context)."""
+        context.get_mutable_abstract_parameter(self._plan_index).set_value(_PlanCache(plan))
+
+    def get_plan(self, context) -> GraspPlan:
+        return context.get_abstract_parameter(self._plan_index).get_value().plan
+
+    def _cache(self, context) -> "_PlanCache":
+        return context.get_abstract_parameter(self._plan_index).get_value()
+
+    def _calc_arm(self, context, output: BasicVector):
+        output.SetFromVector(self._cache(context).arm_state(context.get_time())[self._state_perm(self._arm_perm)])
+
+    def _calc_hand(self, context, output: BasicVector):
+        output.SetFromVector(self._cache(context).hand_state(context.get_time())[self._state_perm(self._hand_perm)])
+
+    @staticmethod
+    def _state_perm(perm: np.ndarray) -> np.ndarray:
+        return np.concatenate([perm, perm + len(perm)])
+
+    def _calc_status(self, context, output):
+        output.set_value(self.get_plan(context).status)
+
+
+class _PlanCache:
+    """A plan with its trajectories built once (the abstract parameter's value)."""
+
+    def __init__(self, plan: GraspPlan):
+        self.plan = plan
+        self._arm = plan.arm_trajectory()
+        self._hand = plan.hand_trajectory()
+        self._arm_d = self._arm.derivative(1)
+        self._hand_d = self._hand.derivative(1)
+        self._t0, self._t1 = float(plan.times[0]), float(plan.times[-1])
+
+    def _eval(self, traj, dtraj, t):
+        inside = self._t0 < t < self._t1
+        tc = min(max(t, self._t0), self._t1)
+        q = traj.value(tc).ravel()
+        v = dtraj.value(tc).ravel() if inside else np.zeros_like(q)
+        return np.concatenate([q, v])
+
+    def arm_state(self, t: float) -> np.ndarray:
+        return self._eval(self._arm, self._arm_d, t)
+
+    def hand_state(self, t: float) -> np.ndarray:
+        return self._eval(self._hand, self._hand_d, t)
+
+    # Contexts deep-copy their abstract parameters; the plan and its trajectories are immutable.
+    def __deepcopy__(self, memo):
+        return self
+
+    def __copy__(self):
+        return self
