@@ -57,6 +57,56 @@ def _cmd_clouds(args) -> int:
     return 0
 
 
+class _Progress:
+    """A one-line progress bar on stderr (CLI only; the library never prints)."""
+
+    def __init__(self):
+        self.t0 = time.perf_counter()
+        self.stage = None
+
+    def __call__(self, stage: str, done: int, total: int) -> None:
+        if stage != self.stage:
+            if self.stage is not None:
+                sys.stderr.write("\n")
+            self.stage, self.t0 = stage, time.perf_counter()
+        width = 30
+        filled = int(width * done / max(total, 1))
+        rate = done / max(time.perf_counter() - self.t0, 1e-9)
+        sys.stderr.write(f"\r  {stage:<7s} [{'#' * filled}{'.' * (width - filled)}] {done}/{total} "
+                         f"({rate:.2f}/s)")
+        if done == total:
+            sys.stderr.write("\n")
+            self.stage = None
+        sys.stderr.flush()
+
+
+def _cmd_train(args) -> int:
+    from catgrasp_drake.grasping.sampling import SamplingParams
+    from catgrasp_drake.training import TrainingConfig, train_category
+
+    config = TrainingConfig(samples_per_instance=args.samples, seed=args.seed, workers=args.workers,
+                            canonical_instance=args.canonical, cache_dir=args.cache,
+                            sampling=SamplingParams())
+    instances = args.instances or None
+    print(f"training {args.category}: {args.samples} sampled motions per instance, seed {args.seed}")
+    model = train_category(args.category, instances, config, progress=_Progress())
+    out = Path(args.out or f"models/trained/{args.category}.npz")
+    model.save(out)
+    st = model.stats
+    print(f"{'instance':<18s} {'sampled':>7s} {'constr.':>7s} {'plan':>5s} {'sim':>4s} {'grasp':>5s} {'func.':>5s}")
+    for name, s in st["per_instance"].items():
+        print(f"{name:<18s} {s['sampled']:7d} {s['rejected_constraint']:7d} {s['rejected_plan']:5d} "
+              f"{s['simulated']:4d} {s['grasped']:5d} {s['functional']:5d}")
+    rate = st["trials_functional"] / max(st["trials_simulated"], 1)
+    print(f"simulated trials: {st['trials_simulated']}, functional successes: {st['trials_functional']} "
+          f"({100 * rate:.0f} %), instances with a functional success: "
+          f"{st['instances_with_functional_success']}/{st['instances']}")
+    print(f"latent dimensions q = {st['q']}; time: shape space {st['shape_time_s']} s, trials "
+          f"{st['trial_time_s']} s ({st['trials_per_s']} trials/s), total {st['total_time_s']} s")
+    print(f"wrote {out}")
+    return 0
+
+
 def _cmd_demo(args) -> int:
     from catgrasp_drake.demo import run_demo
 
@@ -84,6 +134,17 @@ def build_parser() -> argparse.ArgumentParser:
     k.add_argument("--voxel", type=float, default=0.01)
     k.add_argument("--format", choices=("npy", "pcd", "ply"), default="pcd")
     k.set_defaults(func=_cmd_clouds)
+
+    t = sub.add_parser("train", help="build a category model (shape space + grasp regressor) by simulated trials")
+    t.add_argument("category")
+    t.add_argument("--instances", nargs="+", help="training instances (default: all embedded ones)")
+    t.add_argument("--canonical", help="canonical instance (default: the first training instance)")
+    t.add_argument("--samples", type=int, default=12, help="sampled motions per instance")
+    t.add_argument("--seed", type=int, default=0)
+    t.add_argument("--workers", type=int, default=None, help="worker processes (default: all cores)")
+    t.add_argument("--cache", default="out/trial_cache", help="trial cache directory (resumes interrupted runs)")
+    t.add_argument("--out", help="model file (default: models/trained/<category>.npz)")
+    t.set_defaults(func=_cmd_train)
 
     d = sub.add_parser("demo", help="the main job on the embedded default data")
     d.add_argument("--category", default="drill")

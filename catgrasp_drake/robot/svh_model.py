@@ -106,15 +106,15 @@ ACTUATED_JOINTS: tuple[str, ...] = tuple(list(JOINT_NAMES.values())[:9])
 #: below the limit, so a posture step closes in ~0.5 s; Kp·0.3 rad reaches the effort
 #: limit, so commanding "closed" ~0.3 rad beyond contact squeezes with the full limit.
 ACTUATOR_GAINS: dict[str, tuple[float, float, float]] = {
-    "svh_thumb_flexion": (8.0, 1.2, 2.5),
-    "svh_thumb_opposition": (8.0, 1.2, 2.5),
-    "svh_index_proximal": (6.0, 0.9, 1.8),
-    "svh_index_distal": (4.0, 0.6, 1.2),
-    "svh_middle_proximal": (6.0, 0.9, 1.8),
-    "svh_middle_distal": (4.0, 0.6, 1.2),
-    "svh_ring": (6.0, 0.9, 1.8),
-    "svh_pinky": (6.0, 0.9, 1.8),
-    "svh_finger_spread": (4.0, 0.6, 1.2),
+    "svh_thumb_flexion": (12.0, 1.8, 3.5),
+    "svh_thumb_opposition": (12.0, 1.8, 3.5),
+    "svh_index_proximal": (10.0, 1.5, 3.0),
+    "svh_index_distal": (7.0, 1.05, 2.0),
+    "svh_middle_proximal": (10.0, 1.5, 3.0),
+    "svh_middle_distal": (7.0, 1.05, 2.0),
+    "svh_ring": (10.0, 1.5, 3.0),
+    "svh_pinky": (10.0, 1.5, 3.0),
+    "svh_finger_spread": (6.0, 0.9, 1.5),
 }
 
 #: Effort limit written on the (unactuated) mimic joints; unused by Drake for joints without actuator.
@@ -126,7 +126,7 @@ HAND_TOTAL_MASS = 1.3  # kg (Schunk SVH data sheet: ~1.3 kg)
 FINGER_DENSITY = 700.0  # kg/m^3 over the fitted capsule volumes (hollow shells + cables)
 
 # Contact properties of every hand collision geometry.
-HYDROELASTIC_MODULUS = 2.0e6  # Pa
+HYDROELASTIC_MODULUS = 5.0e6  # Pa
 HUNT_CROSSLEY_DISSIPATION = 5.0  # s/m (used by the TAMSI/similar/lagged approximations)
 RELAXATION_TIME = 0.02  # s (used by SAP instead of Hunt-Crossley)
 MU_STATIC = 1.0

@@ -18,17 +18,25 @@ def test_postures_exist_and_are_within_limits(category):
         assert q.shape == (9,) and q.dtype == float
         for joint, value in zip(models.HAND_ACTUATED_JOINTS, q):
             assert limits[joint][0] <= value <= limits[joint][1]
-    # Closing flexes every finger further than the preshape.
+    # Closing never opens a finger and flexes the middle and ring fingers further than the preshape
+    # (thumb and little finger may keep their preshape, e.g. a tucked thumb).
     flex = [models.HAND_ACTUATED_JOINTS.index(j) for j in ("svh_thumb_flexion", "svh_middle_proximal", "svh_ring", "svh_pinky")]
-    assert np.all(postures["closed"][flex] > postures["preshape"][flex])
+    assert np.all(postures["closed"][flex] >= postures["preshape"][flex])
+    wrap = [models.HAND_ACTUATED_JOINTS.index(j) for j in ("svh_middle_proximal", "svh_middle_distal", "svh_ring")]
+    assert np.all(postures["closed"][wrap] > postures["preshape"][wrap])
 
 
 @pytest.mark.parametrize("category", ["drill", "spray_bottle"])
 def test_trigger_categories_keep_the_index_finger_partly_open(category):
-    q = models.load_hand_postures(category)["closed"]
+    postures = models.load_hand_postures(category)
+    q = postures["closed"]
     idx = models.HAND_ACTUATED_JOINTS.index
-    assert q[idx("svh_index_proximal")] < q[idx("svh_middle_proximal")]
-    assert q[idx("svh_thumb_opposition")] > 0.5
+    # the index's distal joint closes less than the middle finger's, so the distal link lands on the trigger
+    assert q[idx("svh_index_distal")] < q[idx("svh_middle_distal")] - 0.3
+    # thumb tucked across the palm throughout (an opposed thumb sweeps through the drill body)
+    for name in ("open", "preshape", "closed"):
+        assert postures[name][idx("svh_thumb_flexion")] > 0.9
+        assert postures[name][idx("svh_thumb_opposition")] < 0.1
 
 
 def test_unknown_category_lists_known_ones():

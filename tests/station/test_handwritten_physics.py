@@ -1,10 +1,9 @@
-"""PHYSICS: the hand-written grasps lift the default drill and spray bottle and hold them 2 s.
+"""PHYSICS: the hand-written grasps lift the default drill, spray bottle and mug and hold them 2 s.
 
-Must-have figures of the station issue. Both are currently marked xfail
-(non-strict): the hand-written grasps plan and execute, the spray bottle is
-lifted and held (grasp success) but the index distal link ends beside the
-trigger, and the drill rotates out of the grip during the lift -- see
-catgrasp_drake/station/NOTES_for_robot.md. Remove the marks once they pass.
+Must-have figures of the station issue: functional success (index distal link
+on the trigger) for drill_00 and spray_bottle_00, grasp success for mug_00.
+The mug's functional criterion (tilt <= 15 deg) is not reached yet (the mug
+turns ~20 deg in the handle grasp): marked xfail.
 """
 
 from __future__ import annotations
@@ -27,14 +26,13 @@ def _trial(name):
 def test_handwritten_motion_loads_for_every_instance():
     from catgrasp_drake.data.dataset import list_instances
 
-    for category in ("drill", "spray_bottle"):
+    for category in ("drill", "spray_bottle", "mug"):
         for instance in list_instances(category):
             m = load_handwritten_motion(category, instance)
             assert m.frame == "object" and m.lift_height >= 0.10 and m.hold_time >= 2.0
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(strict=False, reason="drill rotates out of the grip during the lift (NOTES_for_robot.md)")
 def test_handwritten_drill_grasp_is_functional():
     r = _trial("drill_default")
     assert r.plan_status == "ok"
@@ -44,7 +42,6 @@ def test_handwritten_drill_grasp_is_functional():
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(strict=False, reason="spray bottle held, index distal beside the trigger (NOTES_for_robot.md)")
 def test_handwritten_spray_bottle_grasp_is_functional():
     r = _trial("spray_bottle_default")
     assert r.plan_status == "ok"
@@ -59,3 +56,19 @@ def test_handwritten_spray_bottle_grasp_lifts_and_holds():
     assert r.grasp_success, f"{r.failure_reason}: {r.detail}"
     assert r.object_rise_m >= 0.10
     assert r.timeline["end"] - r.timeline["hold"] >= 2.0
+
+
+@pytest.mark.slow
+def test_handwritten_mug_grasp_lifts_and_holds():
+    r = _trial("mug_default")
+    assert r.plan_status == "ok"
+    assert r.grasp_success, f"{r.failure_reason}: {r.detail}"
+    assert r.object_rise_m >= 0.10
+    assert "svh_middle_distal_link" in r.hand_links_on_object
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(strict=False, reason="the mug turns ~20 deg in the handle grasp (limit 15 deg)")
+def test_handwritten_mug_grasp_is_functional():
+    r = _trial("mug_default")
+    assert r.functional_success, f"{r.failure_reason}: {r.detail}"

@@ -1,0 +1,700 @@
+"""Coherent Point Drift: non-rigid (paper eqs. 1-8) and rigid with scale (numpy + scipy only).
+
+Model (Myronenko & Song 2010): the ``M`` source points, moved by a transform
+``T``, are the centres of an isotropic Gaussian mixture with variance
+``sigma2``, plus a uniform outlier component of weight ``w``; the ``N`` target
+points are drawn from it. EM minimises
+
+    f = -sum_n log( sum_m exp(-|x_n - T(y_m)|^2 / (2 sigma2)) + c ) + (N D / 2) log sigma2
+        + lam / 2 * tr(W^T G W)                           (non-rigid only)
+
+with ``c = (2 pi sigma2)^(D/2) w / (1 - w) * M / N`` (paper eq. 7), non-rigid
+``T(Y) = Y + G W`` with the Gaussian kernel ``G_ij = exp(-|y_i - y_j|^2 / (2 beta^2))``
+(eqs. 4-5) and the M-step ``(G + lam sigma2 d(P1)^-1) W = d(P1)^-1 P X - Y``
+(eq. 8), solved in the equivalent division-free form
+``(d(P1) G + lam sigma2 I) W = P X - d(P1) Y``.
+
+Units and normalisation
+-----------------------
+Both clouds are normalised *jointly* (one shift, one scale: the RMS distance of
+the union from its centroid) before EM, as in Myronenko's reference code, so
+that ``w`` (whose uniform density is ``1/N`` in the paper's formula) means the
+same thing for objects in metres as for unit-size data, and ``lam`` is
+dimensionless. Inputs and outputs are in the caller's units (metres):
+
+* ``beta`` -- kernel width in metres (converted internally to ``beta / scale``);
+* ``lam`` -- dimensionless, applied in normalised coordinates (the paper's);
+* ``w`` -- outlier weight in [0, 1);
+* ``sigma2`` -- initial variance in m^2, or None for the data estimate
+  ``sum_mn |x_n - y_m|^2 / (D M N)``.
+
+The paper's values ``beta = 1, lambda = 3, sigma2 = 0.01`` were given in
+normalised units; for a drill (RMS radius ~0.07 m) ``beta = 1`` would be a 0.07 m
+kernel. The defaults of this module (``DEFAULT_BETA_M = 0.02`` m,
+``DEFAULT_LAMBDA = 3``) were chosen on the real drill set (see
+benchmarks/RESULTS_core.md).
+
+Convergence: EM stops when the objective ``f`` changes by less than
+``tol`` per target point (``|f_k - f_{k-1}| / N < tol``; differences of ``f``
+do not depend on the coordinate scale), or when ``sigma2`` reaches its floor.
+
+Speed-ups (all exact or with a stated, measured error):
+
+* E-step without an ``M x N x D`` temporary: the exponents come from one
+  GEMM of augmented coordinates, evaluated in column blocks (bounded memory:
+  ``M x block`` floats per thread) and in parallel threads (numpy's ``exp`` and
+  BLAS release the GIL). Columns whose every kernel value underflows (points far
+  from everything) are recomputed in the log domain: no division by zero, no NaN.
+* ``low_rank=K``: ``G ~ Q diag(lam_K) Q^T`` from the top-``K`` eigenpairs
+  (randomised subspace iteration with a fixed seed, ``G`` never stored); the
+  M-step becomes a ``K x K`` solve. ``W`` is returned projected on ``span(Q)``
+  so that the exact kernel gives the same displacements as the low-rank one
+  at the source points (``G Q = Q diag(lam)``). ``low_rank="auto"`` picks ``K``
+  so that the kept eigenvalues hold ``1 - 1e-4`` of ``trace(G) = M``.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+import scipy.linalg
+
+from catgrasp_drake.core.validation import as_points, positive
+from catgrasp_drake.errors import InputError
+
+#: Kernel width (m) used by the project's defaults (tuned on the real drills).
+DEFAULT_BETA_M = 0.02
+#: Regularisation weight (dimensionless, normalised coordinates).
+DEFAULT_LAMBDA = 3.0
+#: The paper's values, in its normalised units (documentation only).
+PAPER_BETA, PAPER_LAMBDA, PAPER_SIGMA2 = 1.0, 3.0, 0.01
+#: Floor of sigma2 in normalised units (keeps exact-fit problems finite).
+SIGMA2_FLOOR = 1e-10
+#: Kernel trace fraction kept by ``low_rank="auto"``.
+AUTO_RANK_TRACE = 1.0 - 1e-4
+
+_BLOCK_ELEMENTS = 1 << 19  # E-step block: M x block <= 512k doubles = 4 MB per thread
+
+
+@dataclass(frozen=True)
+class CPDIteration:
+    """What a callback receives after each EM iteration (caller's units)."""
+
+    iteration: int
+    transformed: np.ndarray
+    sigma2: float
+    objective: float
+
+
+@dataclass(frozen=True)
+class NonRigidCPDResult:
+    """Result of :func:`nonrigid_cpd` (metres unless stated).
+
+    ``W`` (M, 3) kernel weights such that ``source + gaussian_kernel(source, source, beta) @ W``
+    equals ``transformed``; ``objective`` is the final value of ``f`` in normalised
+    coordinates; ``P1`` (M,) the final posterior mass of each source point;
+    ``rank`` the kernel rank used (M when exact); ``kernel_trace_kept`` the
+    fraction of ``trace(G)`` kept by the low-rank kernel (1.0 when exact).
+    """
+
+    W: np.ndarray
+    transformed: np.ndarray
+    sigma2: float
+    iterations: int
+    converged: bool
+    objective: float
+    beta: float
+    lam: float
+    w: float
+    P1: np.ndarray
+    rank: int
+    kernel_trace_kept: float
+
+
+@dataclass(frozen=True)
+class RigidCPDResult:
+    """Result of :func:`rigid_cpd`: ``transformed = s * source @ R.T + t``."""
+
+    R: np.ndarray
+    t: np.ndarray
+    s: float
+    transformed: np.ndarray
+    sigma2: float
+    iterations: int
+    converged: bool
+    objective: float
+    P1: np.ndarray
+
+    def transform(self, points) -> np.ndarray:
+        """Apply the estimated similarity to other (K, 3) points."""
+        p = as_points(points, "points")
+        return self.s * p @ self.R.T + self.t
+
+
+# --------------------------------------------------------------------------- helpers
+
+
+def gaussian_kernel(A, B, beta) -> np.ndarray:
+    """``G[i, j] = exp(-|a_i - b_j|^2 / (2 beta^2))`` for (K, D) ``A`` and (L, D) ``B``."""
+    A = np.asarray(A, dtype=np.float64)
+    B = np.asarray(B, dtype=np.float64)
+    if A.ndim != 2 or B.ndim != 2 or A.shape[1] != B.shape[1]:
+        raise InputError(f"gaussian_kernel: expected (K, D) and (L, D) arrays, got {A.shape} and {B.shape}")
+    beta = positive(beta, "beta")
+    d2 = _sqdist(A, B)
+    d2 *= -0.5 / (beta * beta)
+    np.maximum(d2, -700.0, out=d2)
+    np.exp(d2, out=d2)
+    d2[d2 < 1e-150] = 0.0  # no subnormals downstream (they slow BLAS/LAPACK ~10x)
+    return d2
+
+
+def _sqdist(A: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """Squared distances (K, L), exact to rounding (centred, clipped at 0)."""
+    c = 0.5 * (A.mean(axis=0) + B.mean(axis=0)) if len(A) and len(B) else 0.0
+    A = A - c
+    B = B - c
+    d2 = (A * A).sum(1)[:, None] + (B * B).sum(1)[None, :]
+    d2 -= 2.0 * (A @ B.T)
+    np.maximum(d2, 0.0, out=d2)
+    return d2
+
+
+def joint_normalization(source: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, float]:
+    """Centre and scale used inside CPD: centroid of the union and its RMS radius."""
+    both = np.concatenate([source, target], axis=0)
+    center = both.mean(axis=0)
+    scale = float(np.sqrt(((both - center) ** 2).sum(1).mean()))
+    if not np.isfinite(scale) or scale <= 0.0:
+        scale = 1.0  # all points coincide: any scale works
+    return center, scale
+
+
+def initial_sigma2(source: np.ndarray, target: np.ndarray) -> float:
+    """``sum_mn |x_n - y_m|^2 / (D M N)`` in O((M + N) D)."""
+    M, D = source.shape
+    N = target.shape[0]
+    total = M * (target * target).sum() + N * (source * source).sum() - 2.0 * source.sum(0) @ target.sum(0)
+    return max(float(total) / (D * M * N), 0.0)
+
+
+def _n_threads() -> int:
+    return max(1, min(4, os.cpu_count() or 1))
+
+
+#: Run BLAS single-threaded inside the EM loops (see :class:`single_threaded_blas`).
+LIMIT_BLAS_THREADS = True
+
+
+class single_threaded_blas:
+    """Context manager: OpenBLAS runs single-threaded inside, restored on exit.
+
+    The EM loops call many small BLAS/LAPACK kernels between numpy ufuncs;
+    OpenBLAS's worker threads spin-wait between calls and, when the cores are
+    shared (another process running), made CPD 10-20x slower on the 2-core
+    test machine (0.3 s -> 6 s for one 500-point drill registration). The
+    parallelism that matters (the E-step's exp) is done by this module's own
+    threads. Linux + OpenBLAS only (the libraries loaded by numpy and scipy
+    are found in /proc/self/maps and driven with ctypes); a no-op elsewhere
+    or when :data:`LIMIT_BLAS_THREADS` is False. The setting is process-wide
+    while active.
+    """
+
+    _libs = None
+
+    @classmethod
+    def _find(cls):
+        if cls._libs is not None:
+            return cls._libs
+        libs = []
+        try:
+            import ctypes
+
+            with open("/proc/self/maps") as f:
+                paths = sorted({ln.split()[-1] for ln in f if "openblas" in ln.lower() and ".so" in ln})
+            for path in paths:
+                try:
+                    lib = ctypes.CDLL(path)
+                except OSError:
+                    continue
+                for get, set_ in (("scipy_openblas_get_num_threads64_", "scipy_openblas_set_num_threads64_"),
+                                  ("scipy_openblas_get_num_threads", "scipy_openblas_set_num_threads"),
+                                  ("openblas_get_num_threads64_", "openblas_set_num_threads64_"),
+                                  ("openblas_get_num_threads", "openblas_set_num_threads")):
+                    if hasattr(lib, get) and hasattr(lib, set_):
+                        g, s_ = getattr(lib, get), getattr(lib, set_)
+                        g.restype = ctypes.c_int
+                        s_.argtypes = [ctypes.c_int]
+                        libs.append((g, s_))
+                        break
+        except OSError:
+            libs = []
+        cls._libs = libs
+        return libs
+
+    def __enter__(self):
+        self._saved = []
+        if LIMIT_BLAS_THREADS:
+            for g, s_ in self._find():
+                n = int(g())
+                if n > 1:
+                    s_(1)
+                    self._saved.append((s_, n))
+        return self
+
+    def __exit__(self, *exc):
+        for s_, n in self._saved:
+            s_(n)
+        return False
+
+
+def _blas_single(fn):
+    """Decorator: run ``fn`` inside :class:`single_threaded_blas`."""
+    import functools
+
+    @functools.wraps(fn)
+    def wrapper(*args, **kwargs):
+        with single_threaded_blas():
+            return fn(*args, **kwargs)
+
+    return wrapper
+
+
+@dataclass(frozen=True)
+class EStep:
+    """Sufficient statistics of one E-step: ``P1 = P 1``, ``Pt1 = P^T 1``, ``PX = P X``,
+    ``Np = 1^T P 1`` and ``nll`` (negative log-likelihood of the targets, normalised units)."""
+
+    P1: np.ndarray
+    Pt1: np.ndarray
+    PX: np.ndarray
+    Np: float
+    nll: float
+
+
+_EXP_CLAMP = -300.0  # exponents below this are clamped (relative error < e^-50 per kept column)
+_BAD_LOGSUM = -250.0  # a column whose largest exponent is below this is redone in the log domain
+
+
+def _estep_block(Ya, Ysc, X, Xa, sigma2, log_c, lo, hi):
+    """E-step for target columns lo:hi. Returns partial [P X | P 1] (M, D+1), Pt1 block, sum log den.
+
+    Exponents are clamped at -300 before ``exp`` so that no subnormal number is
+    ever produced (subnormals slow BLAS and ``exp`` down by 10x); a column whose
+    kernel sum is below ``e^-250`` is recomputed exactly with a max-shift, so
+    the clamp changes a kept column by less than ``M e^-50`` relative.
+    """
+    E = Ya @ Xa[lo:hi].T  # exponents -|y - x|^2 / (2 sigma2), (M, nb)
+    np.maximum(E, _EXP_CLAMP, out=E)
+    np.exp(E, out=E)
+    s = E.sum(axis=0)
+    c = math.exp(log_c) if log_c > -700.0 else 0.0
+    den = s + c
+    bad = s < math.exp(_BAD_LOGSUM)
+    with np.errstate(divide="ignore"):
+        logden = np.log(den)
+    inv = 1.0 / np.where(bad, 1.0, den)
+    pt1 = s * inv
+    if np.any(bad):
+        idx = np.flatnonzero(bad)
+        e = -_sqdist(Ysc, X[lo:hi][idx]) / (2.0 * sigma2)
+        m = e.max(axis=0)
+        a = np.exp(np.maximum(e - m, -700.0))
+        log_shifted_c = log_c - m
+        den_b = a.sum(axis=0) + np.exp(np.minimum(log_shifted_c, 700.0))
+        pb = a / den_b
+        pb[pb < 1e-200] = 0.0  # outliers far from everything: exactly no mass, no subnormals
+        E[:, idx] = pb
+        inv[idx] = 1.0
+        pt1[idx] = pb.sum(axis=0)
+        logden[idx] = m + np.logaddexp(np.log(a.sum(axis=0)), log_shifted_c)
+    rhs = np.empty((hi - lo, X.shape[1] + 1))
+    rhs[:, :-1] = X[lo:hi] * inv[:, None]
+    rhs[:, -1] = inv
+    acc = E @ rhs
+    return acc, pt1, float(logden.sum())
+
+
+def estep(Y_t: np.ndarray, X: np.ndarray, sigma2: float, w: float, *, pool=None,
+          log_uniform: float | None = None) -> EStep:
+    """CPD E-step for transformed source ``Y_t`` (M, D) and targets ``X`` (N, D).
+
+    ``log_uniform`` overrides the log of the uniform-term constant ``c`` (the
+    default is paper eq. 7's ``(2 pi sigma2)^(D/2) w/(1-w) M/N``). Works in any
+    units but is written for normalised coordinates.
+    """
+    M, D = Y_t.shape
+    N = X.shape[0]
+    if log_uniform is not None:
+        log_c = log_uniform
+    elif w > 0.0:
+        log_c = 0.5 * D * math.log(2.0 * math.pi * sigma2) + math.log(w / (1.0 - w)) + math.log(M / N)
+    else:
+        log_c = -math.inf
+    # centre for accurate augmented GEMM
+    ctr = X.mean(axis=0)
+    Ysc = Y_t - ctr
+    Xc = X - ctr
+    inv2s = 0.5 / sigma2
+    Ya = np.empty((M, D + 2))
+    Ya[:, :D] = Ysc / sigma2
+    Ya[:, D] = -inv2s * (Ysc * Ysc).sum(1)
+    Ya[:, D + 1] = 1.0
+    Xa = np.empty((N, D + 2))
+    Xa[:, :D] = Xc
+    Xa[:, D] = 1.0
+    Xa[:, D + 1] = -inv2s * (Xc * Xc).sum(1)
+    nb = max(16, _BLOCK_ELEMENTS // max(M, 1))
+    if pool is not None:  # at least one block per thread
+        nb = max(16, min(nb, -(-N // _n_threads())))
+    bounds = [(lo, min(N, lo + nb)) for lo in range(0, N, nb)]
+    args = (Ya, Ysc, Xc, Xa, sigma2, log_c)
+    if pool is not None and len(bounds) > 1:
+        parts = list(pool.map(lambda b: _estep_block(*args, *b), bounds))
+    else:
+        parts = [_estep_block(*args, lo, hi) for lo, hi in bounds]
+    acc = parts[0][0]
+    for p in parts[1:]:
+        acc = acc + p[0]
+    Pt1 = np.concatenate([p[1] for p in parts])
+    sum_logden = sum(p[2] for p in parts)
+    P1 = acc[:, -1].copy()
+    P1[P1 < 1e-100] = 0.0  # keeps d(P1) G free of subnormals
+    PX = acc[:, :-1] + np.outer(P1, ctr)  # undo the centring of X
+    Np = float(P1.sum())
+    if w > 0.0:
+        const = -N * math.log((1.0 - w) / M)
+    else:
+        const = N * math.log(M)
+    nll = -sum_logden + const + 0.5 * N * D * math.log(2.0 * math.pi * sigma2)
+    return EStep(P1=P1, Pt1=Pt1, PX=PX, Np=Np, nll=nll)
+
+
+def _sigma2_update(X, T, e: EStep) -> float:
+    D = X.shape[1]
+    xPx = float(e.Pt1 @ (X * X).sum(1))
+    tPt = float(e.P1 @ (T * T).sum(1))
+    trPXT = float((e.PX * T).sum())
+    return (xPx - 2.0 * trPXT + tPt) / (e.Np * D)
+
+
+def _check_common(source, target, w, max_iter, tol):
+    Y = as_points(source, "source", min_points=3)
+    X = as_points(target, "target", min_points=3)
+    try:
+        w = float(w)
+    except (TypeError, ValueError):
+        raise InputError(f"w: expected a number in [0, 1), got {w!r}") from None
+    if not (0.0 <= w < 1.0):
+        raise InputError(f"w: the outlier weight must be in [0, 1), got {w}")
+    if int(max_iter) < 1:
+        raise InputError(f"max_iter: must be >= 1, got {max_iter}")
+    if not (float(tol) >= 0.0):
+        raise InputError(f"tol: must be >= 0, got {tol}")
+    return Y, X, w, int(max_iter), float(tol)
+
+
+# --------------------------------------------------------------------------- low-rank kernel
+
+
+def _kernel_matmat(Y: np.ndarray, beta: float, B: np.ndarray) -> np.ndarray:
+    """``G(Y, Y) @ B`` with G built block by block (never stored)."""
+    M = Y.shape[0]
+    out = np.empty((M, B.shape[1]))
+    nb = max(16, _BLOCK_ELEMENTS // max(M, 1))
+    for lo in range(0, M, nb):
+        hi = min(M, lo + nb)
+        out[lo:hi] = gaussian_kernel(Y[lo:hi], Y, beta) @ B
+    return out
+
+
+def low_rank_kernel(Y, beta: float, rank, *, power_iterations: int = 2, seed: int = 0):
+    """Top eigenpairs of ``G(Y, Y)``: returns ``(Q (M, K), lam (K,), kept_trace_fraction)``.
+
+    Randomised subspace iteration (Halko et al. 2011, Alg. 4.4 + 5.3) with a
+    fixed seed (deterministic). ``rank`` is an int K or ``"auto"``: the smallest
+    K whose eigenvalues hold :data:`AUTO_RANK_TRACE` of ``trace(G) = M``
+    (predicted from a 300-point subsample's spectrum, verified, doubled if short).
+    """
+    Y = as_points(Y, "source", min_points=1)
+    M = Y.shape[0]
+    rng = np.random.default_rng(seed)
+    if rank == "auto":
+        # predict K from the spectrum of a strided subsample (eigenvalues scale ~ M / m), then verify
+        m = min(M, 300)
+        sub = Y[(np.arange(m) * (M / m)).astype(int)]
+        ev = np.sort(np.linalg.eigvalsh(gaussian_kernel(sub, sub, beta)))[::-1]
+        k_pred = int(np.searchsorted(np.cumsum(ev) / m, AUTO_RANK_TRACE) + 1)
+        k = min(M, int(1.25 * k_pred) + 8)
+        while True:
+            Q, lam = _randomized_eigh(Y, beta, k, power_iterations, rng)
+            kept = float(lam.sum()) / M
+            if kept >= AUTO_RANK_TRACE or k >= M:
+                break
+            k = min(M, 2 * k)
+        # trim to the smallest prefix that reaches the target
+        csum = np.cumsum(lam) / M
+        k_use = int(min(len(lam), np.searchsorted(csum, AUTO_RANK_TRACE) + 1))
+        return Q[:, :k_use], lam[:k_use], float(csum[k_use - 1])
+    try:
+        k = int(rank)
+    except (TypeError, ValueError):
+        raise InputError(f"low_rank: expected None, a positive int or 'auto', got {rank!r}") from None
+    if k < 1:
+        raise InputError(f"low_rank: rank must be >= 1, got {k}")
+    k = min(k, M)
+    Q, lam = _randomized_eigh(Y, beta, k, power_iterations, rng)
+    return Q, lam, float(lam.sum()) / M
+
+
+def _randomized_eigh(Y, beta, k, power_iterations, rng):
+    M = Y.shape[0]
+    if M <= 2 * k + 10 or M <= 200:
+        lam, Q = scipy.linalg.eigh(gaussian_kernel(Y, Y, beta), subset_by_index=[M - k, M - 1])
+    else:
+        p = min(M - k, max(10, k // 4))
+        Z = _kernel_matmat(Y, beta, rng.standard_normal((M, k + p)))
+        for _ in range(power_iterations):
+            Z, _ = np.linalg.qr(Z)
+            Z = _kernel_matmat(Y, beta, Z)
+        Z, _ = np.linalg.qr(Z)
+        GZ = _kernel_matmat(Y, beta, Z)
+        Bs = Z.T @ GZ
+        lam, S = np.linalg.eigh(0.5 * (Bs + Bs.T))
+        Q = Z @ S
+        lam, Q = lam[-k:], Q[:, -k:]
+    order = np.argsort(lam)[::-1]
+    lam = np.maximum(lam[order], 0.0)
+    Q = Q[:, order]
+    keep = lam > 1e-12 * max(lam[0], 1e-300)
+    return np.ascontiguousarray(Q[:, keep]), lam[keep]
+
+
+# --------------------------------------------------------------------------- non-rigid
+
+
+def _exact_mstep(G, P1, B, lam_s2):
+    """Solve ``(d(P1) G + lam_s2 I) W = B`` (eq. 8 without d(P1)^-1) by Cholesky.
+
+    On the support ``I = {P1 > 0}`` the substitution ``W = S U`` with
+    ``S = d(P1)^(1/2)`` gives the SPD system ``(S G S + lam_s2 I) U = S^-1 B``;
+    off the support ``B`` is zero (a point with no posterior mass has
+    ``PX = 0``), so ``W`` is zero there.
+    """
+    I = np.flatnonzero(P1 > 0.0)
+    W = np.zeros_like(B)
+    if len(I) == 0:
+        return W
+    sq = np.sqrt(P1[I])
+    A = G[np.ix_(I, I)] if len(I) < len(P1) else G.copy()
+    A *= sq[:, None]
+    A *= sq[None, :]
+    A[np.diag_indices(len(I))] += lam_s2
+    rhs = B[I] / sq[:, None]
+    c = scipy.linalg.cho_factor(A, lower=True, overwrite_a=True, check_finite=False)
+    W[I] = sq[:, None] * scipy.linalg.cho_solve(c, rhs, overwrite_b=True, check_finite=False)
+    return W
+
+
+
+@_blas_single
+def nonrigid_cpd(
+    source,
+    target,
+    *,
+    beta: float = DEFAULT_BETA_M,
+    lam: float = DEFAULT_LAMBDA,
+    w: float = 0.0,
+    sigma2: float | None = None,
+    max_iter: int = 150,
+    tol: float = 1e-5,
+    low_rank=None,
+    callback: Callable[[CPDIteration], object] | None = None,
+) -> NonRigidCPDResult:
+    """Non-rigid CPD moving ``source`` (M, 3) onto ``target`` (N, 3), paper eqs. 5-8.
+
+    See the module docstring for units, normalisation and convergence.
+    ``low_rank``: None (exact kernel, one Cholesky per iteration, O(M^3)), an int K or
+    ``"auto"``. ``callback(CPDIteration)`` is called after each iteration.
+    """
+    Y, X, w, max_iter, tol = _check_common(source, target, w, max_iter, tol)
+    if Y.shape[1] != X.shape[1]:
+        raise InputError(f"source and target dimensions differ: {Y.shape[1]} vs {X.shape[1]}")
+    beta = positive(beta, "beta")
+    lam = positive(lam, "lam")
+    center, scale = joint_normalization(Y, X)
+    Yn = (Y - center) / scale
+    Xn = (X - center) / scale
+    bn = beta / scale
+    M, D = Yn.shape
+    N = Xn.shape[0]
+    s2 = initial_sigma2(Yn, Xn) if sigma2 is None else positive(sigma2, "sigma2") / scale**2
+    s2 = max(s2, SIGMA2_FLOOR)
+
+    if low_rank is None:
+        G = gaussian_kernel(Yn, Yn, bn)
+        Q = lam_k = None
+        rank, kept = M, 1.0
+    else:
+        Q, lam_k, kept = low_rank_kernel(Yn, bn, low_rank)
+        G = None
+        rank = Q.shape[1]
+
+    Wn = np.zeros((M, D))
+    Z = np.zeros((rank, D)) if Q is not None else None
+    T = Yn.copy()
+    reg = 0.0
+    f_prev = math.inf
+    converged = False
+    it = 0
+    e = None
+    n_threads = _n_threads() if M * N >= 200_000 else 1
+    pool = ThreadPoolExecutor(n_threads) if n_threads > 1 else None
+    try:
+        for it in range(1, max_iter + 1):
+            e = estep(T, Xn, s2, w, pool=pool)
+            f = e.nll + 0.5 * lam * reg
+            if abs(f_prev - f) / N < tol:
+                converged = True
+                it -= 1  # the parameters did not change in this iteration's E-step
+                break
+            f_prev = f
+            if e.Np <= 1e-300:  # every target is an outlier: nothing to fit
+                break
+            B = e.PX - e.P1[:, None] * Yn
+            if Q is None:
+                Wn = _exact_mstep(G, e.P1, B, lam * s2)
+                V = G @ Wn
+                reg = float((Wn * V).sum())
+            else:
+                QtDQ = Q.T @ (e.P1[:, None] * Q)
+                A = QtDQ * lam_k[None, :]
+                A[np.diag_indices(rank)] += lam * s2
+                Z = np.linalg.solve(A, Q.T @ B)
+                LZ = lam_k[:, None] * Z
+                V = Q @ LZ
+                reg = float((Z * LZ).sum())
+            T = Yn + V
+            s2 = max(_sigma2_update(Xn, T, e), SIGMA2_FLOOR)
+            if callback is not None:
+                callback(CPDIteration(it, center + scale * T, s2 * scale**2, f))
+            if s2 <= SIGMA2_FLOOR:
+                converged = True
+                break
+    finally:
+        if pool is not None:
+            pool.shutdown()
+    if Q is not None:
+        Wn = Q @ Z
+    return NonRigidCPDResult(
+        W=scale * Wn,
+        transformed=center + scale * T,
+        sigma2=s2 * scale**2,
+        iterations=it,
+        converged=converged,
+        objective=float(f),
+        beta=beta,
+        lam=lam,
+        w=w,
+        P1=e.P1 if e is not None else np.zeros(M),
+        rank=rank,
+        kernel_trace_kept=kept,
+    )
+
+
+# --------------------------------------------------------------------------- rigid
+
+
+def weighted_procrustes(PX, P1, Pt1, Np, X, Y, *, scale: bool = True):
+    """Rigid (+ scale) CPD M-step: ``argmin sum P_mn |x_n - (s R y_m + t)|^2``.
+
+    Returns ``(R, t, s, tr_AR)`` with ``R`` proper (det +1).
+    """
+    mu_x = (Pt1 @ X) / Np
+    mu_y = (P1 @ Y) / Np
+    A = PX.T @ Y - Np * np.outer(mu_x, mu_y)  # sum P (x - mu_x)(y - mu_y)^T
+    U, S, Vt = np.linalg.svd(A)
+    C = np.ones(A.shape[0])
+    C[-1] = np.sign(np.linalg.det(U @ Vt)) or 1.0
+    R = (U * C) @ Vt
+    tr_AR = float((S * C).sum())
+    if scale:
+        yPy = float(P1 @ ((Y - mu_y) ** 2).sum(1))
+        s = tr_AR / yPy if yPy > 0 else 1.0
+        if not np.isfinite(s) or s <= 0:
+            s = 1.0
+    else:
+        s = 1.0
+    t = mu_x - s * R @ mu_y
+    return R, t, s, tr_AR
+
+
+@_blas_single
+def rigid_cpd(
+    source,
+    target,
+    *,
+    scale: bool = True,
+    w: float = 0.0,
+    sigma2: float | None = None,
+    max_iter: int = 100,
+    tol: float = 1e-6,
+    callback: Callable[[CPDIteration], object] | None = None,
+) -> RigidCPDResult:
+    """Rigid (``scale=True``: similarity) CPD of ``source`` onto ``target``.
+
+    ``transformed = s * source @ R.T + t`` with a proper rotation ``R``. Same
+    normalisation, outlier model and convergence rule as :func:`nonrigid_cpd`.
+    """
+    Y, X, w, max_iter, tol = _check_common(source, target, w, max_iter, tol)
+    if Y.shape[1] != X.shape[1]:
+        raise InputError(f"source and target dimensions differ: {Y.shape[1]} vs {X.shape[1]}")
+    center, sc = joint_normalization(Y, X)
+    Yn = (Y - center) / sc
+    Xn = (X - center) / sc
+    M, D = Yn.shape
+    N = Xn.shape[0]
+    s2 = initial_sigma2(Yn, Xn) if sigma2 is None else positive(sigma2, "sigma2") / sc**2
+    s2 = max(s2, SIGMA2_FLOOR)
+    R, t, s = np.eye(D), np.zeros(D), 1.0
+    T = Yn.copy()
+    f_prev = math.inf
+    f = math.inf
+    converged = False
+    e = None
+    it = 0
+    for it in range(1, max_iter + 1):
+        e = estep(T, Xn, s2, w)
+        f = e.nll
+        if abs(f_prev - f) / N < tol:
+            converged = True
+            it -= 1
+            break
+        f_prev = f
+        if e.Np <= 1e-300:
+            break
+        R, t, s, tr_AR = weighted_procrustes(e.PX, e.P1, e.Pt1, e.Np, Xn, Yn, scale=scale)
+        T = s * Yn @ R.T + t
+        s2 = max(_sigma2_update(Xn, T, e), SIGMA2_FLOOR)
+        if callback is not None:
+            callback(CPDIteration(it, center + sc * T, s2 * sc**2, f))
+        if s2 <= SIGMA2_FLOOR:
+            converged = True
+            break
+    t_metric = center + sc * t - s * R @ center
+    return RigidCPDResult(
+        R=R,
+        t=t_metric,
+        s=float(s),
+        transformed=center + sc * T,
+        sigma2=s2 * sc**2,
+        iterations=it,
+        converged=converged,
+        objective=float(f),
+        P1=e.P1 if e is not None else np.zeros(M),
+    )
