@@ -45,12 +45,11 @@ def _cmd_contact_sheet(args) -> int:
 
 def _cmd_clouds(args) -> int:
     from catgrasp_drake.data.cloud_io import write_point_cloud
-    from catgrasp_drake.data.dataset import list_instances, load_mesh
-    from catgrasp_drake.data.pointclouds import full_cloud
+    from catgrasp_drake.data.dataset import instance_clouds, list_instances
 
     out = Path(args.out)
-    for name in list_instances(args.category):
-        cloud = full_cloud(load_mesh(args.category, name), voxel=args.voxel)
+    names = list_instances(args.category)
+    for name, cloud in zip(names, instance_clouds(args.category, names, args.voxel)):
         write_point_cloud(out / f"{name}.{args.format}", cloud)
         print(f"  {name:18s} {len(cloud):5d} points")
     print(f"wrote {args.category} clouds to {out}")

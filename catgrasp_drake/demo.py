@@ -22,8 +22,8 @@ def _stage(name: str, t0: float, detail: str) -> float:
 
 def run_demo(args) -> int:
     from catgrasp_drake.data.cloud_io import write_point_cloud
-    from catgrasp_drake.data.dataset import list_instances, load_mesh
-    from catgrasp_drake.data.pointclouds import camera_on_sphere, full_cloud, partial_cloud
+    from catgrasp_drake.data.dataset import instance_clouds, list_instances, load_mesh
+    from catgrasp_drake.data.pointclouds import camera_on_sphere, partial_cloud
     from catgrasp_drake.errors import InputError
     from catgrasp_drake.viz.sheets import dataset_contact_sheet
 
@@ -37,7 +37,7 @@ def run_demo(args) -> int:
     t = time.perf_counter()
     t_start = t
 
-    clouds = {n: full_cloud(load_mesh(args.category, n)) for n in train}
+    clouds = dict(zip(train, instance_clouds(args.category, train)))
     for n, c in clouds.items():
         write_point_cloud(out / "clouds" / f"{n}.pcd", c)
     counts = [len(c) for c in clouds.values()]

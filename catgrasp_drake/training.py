@@ -96,14 +96,6 @@ def trial_code_version() -> str:
     return code_fingerprint(TRIAL_CODE_PATHS)
 
 
-def category_clouds(category: str, instances, voxel: float) -> list[np.ndarray]:
-    """Full clouds (instance frame, metres) of the given instances."""
-    from catgrasp_drake.data.dataset import load_mesh
-    from catgrasp_drake.data.pointclouds import full_cloud
-
-    return [full_cloud(load_mesh(category, n), voxel=voxel) for n in instances]
-
-
 @dataclass
 class InstanceStats:
     sampled: int = 0
@@ -160,7 +152,7 @@ def train_category(
     "trials" progress. Raises InputError when no instance gets a functional
     success (nothing to learn from).
     """
-    from catgrasp_drake.data.dataset import list_instances, load_annotations
+    from catgrasp_drake.data.dataset import instance_clouds, list_instances, load_annotations
     from catgrasp_drake.robot.kinematics import index_pad_in_hand
     from catgrasp_drake.station.handwritten import load_handwritten_motion
 
@@ -173,7 +165,7 @@ def train_category(
         raise InputError(f"canonical instance {canonical!r} is not among the training instances")
     c_index = instances.index(canonical)
 
-    clouds = category_clouds(category, instances, config.cloud_voxel)
+    clouds = instance_clouds(category, instances, config.cloud_voxel)
     space = build_shape_space(clouds, canonical_index=c_index, progress=(
         (lambda d, t: progress("shape", d, t)) if progress else None), **config.shape_kwargs())
     t_shape = time.perf_counter() - t0

@@ -88,16 +88,27 @@ def instance_sdf_url(category: str, instance: str) -> str:
     return f"package://{PACKAGE_NAME}/objects/{category}/{instance}/{instance}.sdf"
 
 
-def load_annotations(category: str, instance: str) -> dict:
-    """The instance's annotations (regions, mass, bbox, params) as a dict."""
-    path = instance_dir(category, instance) / "annotations.json"
+def read_annotations(path: Path) -> dict:
+    """Read and check an ``annotations.json`` file."""
     try:
-        data = json.loads(path.read_text())
+        data = json.loads(Path(path).read_text())
     except (OSError, json.JSONDecodeError) as e:
         raise ModelFileError(f"{path}: unreadable annotations ({e})") from None
     if data.get("format") != ANNOTATION_FORMAT or data.get("format_version") != ANNOTATION_VERSION:
         raise ModelFileError(f"{path}: not a {ANNOTATION_FORMAT} v{ANNOTATION_VERSION} file")
     return data
+
+
+def load_annotations(category: str, instance: str) -> dict:
+    """The instance's annotations (regions, mass, bbox, params) as a dict."""
+    return read_annotations(instance_dir(category, instance) / "annotations.json")
+
+
+def instance_clouds(category: str, instances, voxel: float = 0.01) -> list:
+    """Full clouds (ray-casting + voxel grid; instance frame, metres) of the given instances."""
+    from catgrasp_drake.data.pointclouds import full_cloud
+
+    return [full_cloud(load_mesh(category, n), voxel=voxel) for n in instances]
 
 
 def load_mesh(category: str, instance: str) -> trimesh.Trimesh:
@@ -166,40 +177,50 @@ class WrittenInstance:
     mass_kg: float
 
 
-def write_instance(gen: GeneratedInstance, name: str, directory: Path, seed: list[int]) -> WrittenInstance:
-    """Write mesh, SDF and annotations of one generated instance into ``directory``."""
-    mesh = gen.mesh
-    if not mesh.is_watertight:
-        raise ModelFileError(f"{name}: generated mesh is not watertight")
-    # round-trip through the written precision so mass properties match the file
-    obj = _obj_bytes(mesh)
-    density = DENSITY_KG_M3[gen.category]
-    written = trimesh.Trimesh(vertices=np.round(mesh.vertices, 6), faces=mesh.faces, process=False)
-    written.density = density
-    mass = float(written.mass)
-    com = written.center_mass
-    inertia = written.moment_inertia  # about the centre of mass, body axes
+def _round6(v) -> list[float]:
+    return [round(float(c), 6) for c in v]
+
+
+def write_model_files(directory: Path, name: str, category: str, mesh: trimesh.Trimesh,
+                      mass_solid: trimesh.Trimesh, mass_kg: float, regions: dict, extra: dict) -> WrittenInstance:
+    """Write ``<name>.obj`` (``mesh``), ``<name>.sdf`` and ``annotations.json`` into ``directory``.
+
+    ``mass_solid`` is a closed mesh whose ``density`` is set so that its centre of
+    mass and inertia are the body's; ``extra`` fields are added to the annotations.
+    """
     directory.mkdir(parents=True, exist_ok=True)
-    atomic_write_bytes(directory / f"{name}.obj", obj)
+    com = mass_solid.center_mass
+    inertia = mass_solid.moment_inertia  # about the centre of mass, body axes
+    atomic_write_bytes(directory / f"{name}.obj", _obj_bytes(mesh))
     atomic_write_text(directory / f"{name}.sdf",
-                      _sdf_text(name, f"{name}.obj", mass, com, inertia, _COLORS[gen.category]))
-    lo, hi = written.bounds
+                      _sdf_text(name, f"{name}.obj", mass_kg, com, inertia, _COLORS[category]))
+    vertices = np.round(mesh.vertices, 6)  # the precision written to the OBJ
     annotations = {
         "format": ANNOTATION_FORMAT,
         "format_version": ANNOTATION_VERSION,
-        "category": gen.category,
+        "category": category,
         "instance": name,
-        "seed": seed,
-        "density_kg_m3": density,
-        "mass_kg": round(mass, 6),
-        "center_of_mass": [round(float(c), 6) for c in com],
-        "bbox_min": [round(float(c), 6) for c in lo],
-        "bbox_max": [round(float(c), 6) for c in hi],
-        "regions": gen.regions,
-        "params": gen.params,
+        "mass_kg": round(mass_kg, 6),
+        "center_of_mass": _round6(com),
+        "bbox_min": _round6(vertices.min(axis=0)),
+        "bbox_max": _round6(vertices.max(axis=0)),
+        "regions": regions,
+        **extra,
     }
     atomic_write_text(directory / "annotations.json", json.dumps(annotations, indent=2, sort_keys=True) + "\n")
-    return WrittenInstance(gen.category, name, directory, mass)
+    return WrittenInstance(category, name, directory, mass_kg)
+
+
+def write_instance(gen: GeneratedInstance, name: str, directory: Path, seed: list[int]) -> WrittenInstance:
+    """Write mesh, SDF and annotations of one generated instance into ``directory``."""
+    if not gen.mesh.is_watertight:
+        raise ModelFileError(f"{name}: generated mesh is not watertight")
+    density = DENSITY_KG_M3[gen.category]
+    # mass properties of the mesh at the written precision, so they match the file
+    solid = trimesh.Trimesh(vertices=np.round(gen.mesh.vertices, 6), faces=gen.mesh.faces, process=False)
+    solid.density = density
+    return write_model_files(directory, name, gen.category, gen.mesh, solid, float(solid.mass), gen.regions,
+                             {"seed": seed, "density_kg_m3": density, "params": gen.params})
 
 
 def instance_seed(category: str, index: int, seed: int = DATASET_SEED) -> list[int]:

