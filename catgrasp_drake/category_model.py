@@ -4,7 +4,14 @@
 canonical descriptor R(x), warp its control poses with the dense deformation
 field W(x) (positions and rotation bases, re-orthonormalised), then apply the
 similarity transform of the fit (rotation R, translation t, scale s) into the
-observation frame.
+observation frame. Both act on the grasp's functional point ``grasp_anchor_H``
+(the canonical trigger or handle centre, fixed in the hand frame), the hand
+staying rigid about it, turned by the field's rotation averaged over
+``grasp_rotation_radius`` (the Jacobian at one point of a thin trigger can
+turn the hand by 30 degrees; measured 14-34 deg vs 2-5 with 5 cm): the hand
+base frame sits ~15 cm from the object, where the kernel field has died out
+and a scale error would be multiplied by the lever arm (measured on a drill
+seen from one view, scale 0.85: 30 mm grasp error at the base origin).
 
 File format (one ``.npz``, atomic, checksummed, no pickle): the shape space's
 arrays under ``shape/``, the regressor under ``regressor/``, and a JSON header
@@ -39,12 +46,20 @@ def similarity_matrix(R, t, s: float = 1.0) -> np.ndarray:
     return S
 
 
-def apply_similarity_to_poses(poses: np.ndarray, R, t, s: float = 1.0) -> np.ndarray:
-    """Poses (K, 4, 4) moved by p -> s R p + t; rotations become R @ R_k (scale does not rotate)."""
+def apply_similarity_to_poses(poses: np.ndarray, R, t, s: float = 1.0, anchor=None) -> np.ndarray:
+    """Poses (K, 4, 4) of a rigid body moved by the similarity p -> s R p + t of the object.
+
+    The body's ``anchor`` (3,) (in its own frame; default its origin) goes to
+    ``s R a + t``, its rotation to ``R @ R_k``; the body itself is not
+    scaled (a hand stays a hand), so its origin is placed rigidly about the
+    anchor.
+    """
     out = np.array(poses, dtype=float, copy=True)
     R = np.asarray(R, float)
+    anc = np.zeros(3) if anchor is None else np.asarray(anchor, float)
+    a = out[:, :3, 3] + out[:, :3, :3] @ anc
     out[:, :3, :3] = R @ out[:, :3, :3]
-    out[:, :3, 3] = float(s) * out[:, :3, 3] @ R.T + np.asarray(t, float)
+    out[:, :3, 3] = float(s) * a @ R.T + np.asarray(t, float) - out[:, :3, :3] @ anc
     return out
 
 
@@ -60,6 +75,17 @@ class CategoryModel:
     canonical_instance: str
     params: dict = field(default_factory=dict)
     stats: dict = field(default_factory=dict)
+    #: The grasp's functional point (m, hand-base frame H): the point of the control poses that is
+    #: warped and scaled with the object (None: the frame origin, the paper's plain warp).
+    grasp_anchor_H: tuple | None = None
+    #: Radius (m) over which the deformation's rotation is averaged for the hand's orientation
+    #: (``core.deformation.local_rotations``); None: the field's Jacobian at the anchor (the paper).
+    grasp_rotation_radius: float | None = None
+    #: The regressor's training set (functional successes mapped to the canonical frame): latent
+    #: vectors (n, q), descriptors (n, D) and the index of each row's training instance (n,).
+    training_latent: np.ndarray | None = field(default=None, repr=False)
+    training_descriptors: np.ndarray | None = field(default=None, repr=False)
+    training_groups: np.ndarray | None = field(default=None, repr=False)
 
     def __post_init__(self):
         if self.template.frame != "object":
@@ -68,8 +94,36 @@ class CategoryModel:
         if self.regressor.coef.shape != (D, self.space.q):
             raise InputError(f"regressor maps {self.regressor.coef.shape[1]} -> {self.regressor.coef.shape[0]}, "
                              f"expected q={self.space.q} -> D={D}")
+        if self.grasp_anchor_H is not None:
+            a = np.asarray(self.grasp_anchor_H, float).reshape(-1)
+            if a.shape != (3,) or not np.all(np.isfinite(a)):
+                raise InputError(f"grasp_anchor_H: expected a finite 3-vector (m), got {self.grasp_anchor_H!r}")
+            object.__setattr__(self, "grasp_anchor_H", tuple(float(v) for v in a))
+        if self.grasp_rotation_radius is not None and not (float(self.grasp_rotation_radius) > 0):
+            raise InputError(f"grasp_rotation_radius: expected > 0 m or None, got {self.grasp_rotation_radius!r}")
         if len(self.instances) != len(self.space.latent_train):
             raise InputError("instances and the shape space's training vectors differ in number")
+
+    def refit(self, alpha: float) -> "CategoryModel":
+        """The same model with the regressor re-fitted on its stored training set with ridge ``alpha``."""
+        from dataclasses import replace
+
+        from catgrasp_drake.core.regression import fit_ridge
+
+        if self.training_descriptors is None:
+            raise InputError("this model file holds no training set to re-fit (trained by an older version)")
+        reg = fit_ridge(self.training_latent, self.training_descriptors, alpha=alpha, groups=self.training_groups)
+        return replace(self, regressor=reg, params=self.params | {"ridge_alpha": float(alpha)})
+
+    def instance_grasps(self, index: int) -> np.ndarray:
+        """Rows of the training set (canonical descriptors) that belong to training instance ``index``."""
+        if self.training_descriptors is None:
+            raise InputError("this model file holds no training set")
+        return self.training_descriptors[np.asarray(self.training_groups) == int(index)]
+
+    def warp_options(self) -> dict:
+        """Keyword arguments of ``warp_poses``/``inverse_warp_poses`` for this model's control poses."""
+        return {"anchor": self.grasp_anchor_H, "rotation_radius": self.grasp_rotation_radius}
 
     # ------------------------------------------------------------------ Algorithm 2
     def canonical_motion(self, x) -> GraspMotion:
@@ -79,7 +133,8 @@ class CategoryModel:
     def warped_motion(self, x) -> GraspMotion:
         """R(x) warped by the deformation W(x): the grasp on the completed shape, canonical frame."""
         m = self.canonical_motion(x)
-        poses = warp_poses(self.space.canonical, self.space.decode(x), self.space.beta, m.poses)
+        poses = warp_poses(self.space.canonical, self.space.decode(x), self.space.beta, m.poses,
+                           **self.warp_options())
         return GraspMotion(poses, m.pose_names, dict(m.postures), "object", m.lift_height, m.hold_time)
 
     def transfer(self, x, R=np.eye(3), t=np.zeros(3), s: float = 1.0, *, frame: str = "world") -> GraspMotion:
@@ -90,7 +145,7 @@ class CategoryModel:
         is in that frame (``frame`` names it, "world" by default).
         """
         m = self.warped_motion(x)
-        poses = apply_similarity_to_poses(m.poses, R, t, s)
+        poses = apply_similarity_to_poses(m.poses, R, t, s, anchor=self.grasp_anchor_H)
         return GraspMotion(poses, m.pose_names, dict(m.postures), frame, m.lift_height, m.hold_time)
 
     # ------------------------------------------------------------------ files
@@ -99,6 +154,10 @@ class CategoryModel:
         arrays = {f"shape/{k}": v for k, v in shape_arrays.items()}
         arrays["regressor/coef"] = self.regressor.coef
         arrays["regressor/intercept"] = self.regressor.intercept
+        if self.training_descriptors is not None:
+            arrays["training/latent"] = np.asarray(self.training_latent, float)
+            arrays["training/descriptors"] = np.asarray(self.training_descriptors, float)
+            arrays["training/groups"] = np.asarray(self.training_groups, np.int64)
         meta = {
             "category": self.category,
             "shape": shape_meta,
@@ -108,6 +167,8 @@ class CategoryModel:
             "canonical_instance": self.canonical_instance,
             "params": self.params,
             "stats": self.stats,
+            "grasp_anchor_H": None if self.grasp_anchor_H is None else [float(v) for v in self.grasp_anchor_H],
+            "grasp_rotation_radius": self.grasp_rotation_radius,
         }
         save_arrays(path, arrays, kind=FILE_KIND, version=FILE_VERSION, meta=meta)
 
@@ -129,6 +190,13 @@ class CategoryModel:
                 canonical_instance=str(meta["canonical_instance"]),
                 params=dict(meta.get("params", {})),
                 stats=dict(meta.get("stats", {})),
+                grasp_anchor_H=(None if meta.get("grasp_anchor_H") is None
+                                else tuple(float(v) for v in meta["grasp_anchor_H"])),
+                grasp_rotation_radius=(None if meta.get("grasp_rotation_radius") is None
+                                       else float(meta["grasp_rotation_radius"])),
+                training_latent=arrays.get("training/latent"),
+                training_descriptors=arrays.get("training/descriptors"),
+                training_groups=arrays.get("training/groups"),
             )
         except (KeyError, TypeError, ValueError) as e:
             raise ModelFileError(f"{path}: incomplete or inconsistent category model ({e})") from None

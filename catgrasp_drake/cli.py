@@ -11,7 +11,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from catgrasp_drake.errors import CatgraspError
+from catgrasp_drake.errors import CatgraspError, InputError
 
 
 def _cmd_generate_data(args) -> int:
@@ -86,8 +86,18 @@ def _cmd_train(args) -> int:
     config = TrainingConfig(samples_per_instance=args.samples, seed=args.seed, workers=args.workers,
                             canonical_instance=args.canonical, cache_dir=args.cache,
                             sampling=SamplingParams())
-    instances = args.instances or None
-    print(f"training {args.category}: {args.samples} sampled motions per instance, seed {args.seed}")
+    from catgrasp_drake.data.dataset import list_instances
+
+    instances = args.instances
+    if not instances:
+        names = list_instances(args.category)
+        if not 0 <= args.hold_out <= len(names) - 2:
+            raise InputError(f"--hold-out: expected 0..{len(names) - 2} for {len(names)} instances, got {args.hold_out}")
+        instances = names[:len(names) - args.hold_out]
+        if args.hold_out:
+            print(f"held out (never trained on; the demo's novel instances): {', '.join(names[len(instances):])}")
+    print(f"training {args.category} on {len(instances)} instances: {args.samples} sampled motions per instance, "
+          f"seed {args.seed}")
     model = train_category(args.category, instances, config, progress=_Progress())
     out = Path(args.out or f"models/trained/{args.category}.npz")
     model.save(out)
@@ -110,6 +120,38 @@ def _cmd_demo(args) -> int:
     from catgrasp_drake.demo import run_demo
 
     return run_demo(args)
+
+
+def _cmd_view(args) -> int:
+    from catgrasp_drake.category_model import CategoryModel
+    from catgrasp_drake.data.dataset import CATEGORIES
+    from catgrasp_drake.errors import InputError, ModelFileError
+    from catgrasp_drake.viz.meshcat_tools import start_meshcat
+    from catgrasp_drake.viz.shape_viewer import ShapeViewer
+
+    if args.category not in CATEGORIES:
+        raise InputError(f"unknown category {args.category!r}; known: {', '.join(CATEGORIES)}")
+    path = Path(args.model or f"models/trained/{args.category}.npz")
+    if not path.is_file():
+        raise ModelFileError(f"{path}: no trained model; run 'catgrasp train {args.category}' or pass --model")
+    model = CategoryModel.load(path, category=args.category)
+    meshcat = start_meshcat()
+    viewer = ShapeViewer(model, meshcat)
+    if args.html:
+        viewer.export_html(args.html)
+        print(f"wrote {args.html}")
+    print(f"{args.category}: q = {model.space.q} latent sliders, {len(model.instances)} training instances; "
+          f"Meshcat at {meshcat.web_url()}")
+    if args.once:
+        return 0
+    print("move the sliders in the browser; Ctrl-C to stop")
+    try:
+        while True:
+            viewer.poll()
+            time.sleep(0.05)
+    except KeyboardInterrupt:
+        print()
+    return 0
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -136,7 +178,9 @@ def build_parser() -> argparse.ArgumentParser:
 
     t = sub.add_parser("train", help="build a category model (shape space + grasp regressor) by simulated trials")
     t.add_argument("category")
-    t.add_argument("--instances", nargs="+", help="training instances (default: all embedded ones)")
+    t.add_argument("--instances", nargs="+", help="training instances (default: all embedded ones but --hold-out)")
+    t.add_argument("--hold-out", type=int, default=2,
+                   help="leave the category's last N instances out of training (default 2: the demo's novel ones)")
     t.add_argument("--canonical", help="canonical instance (default: the first training instance)")
     t.add_argument("--samples", type=int, default=12, help="sampled motions per instance")
     t.add_argument("--seed", type=int, default=0)
@@ -146,11 +190,24 @@ def build_parser() -> argparse.ArgumentParser:
     t.set_defaults(func=_cmd_train)
 
     d = sub.add_parser("demo", help="the main job on the embedded default data")
-    d.add_argument("--category", default="drill")
-    d.add_argument("--instance", default=None, help="held-out instance (default: the last one)")
-    d.add_argument("--seed", type=int, default=0)
+    d.add_argument("--category", default="drill", help="drill, spray_bottle or mug")
+    d.add_argument("--instance", default=None, help="object instance (default: the last one the model never saw)")
+    d.add_argument("--seed", type=int, default=0, help="seed of the object's random placement")
+    d.add_argument("--view", choices=("single", "full"), default="single",
+                   help="one depth camera, or four around the object")
+    d.add_argument("--model", help="category model file (default: models/trained/<category>.npz)")
+    d.add_argument("--min-confidence", type=float, default=0.0,
+                   help="refuse the grasp below this estimate confidence (0..1)")
+    d.add_argument("--no-meshcat", action="store_true", help="no Meshcat server and no HTML recording")
     d.add_argument("--out", default="out/demo")
     d.set_defaults(func=_cmd_demo)
+
+    v = sub.add_parser("view", help="inspect a trained model's latent shape space in Meshcat (sliders)")
+    v.add_argument("category")
+    v.add_argument("--model", help="model file (default: models/trained/<category>.npz)")
+    v.add_argument("--html", help="also write a static HTML page with every training instance")
+    v.add_argument("--once", action="store_true", help="draw, write --html, print the URL and exit")
+    v.set_defaults(func=_cmd_view)
     return p
 
 

@@ -5,8 +5,12 @@
 2. The canonical grasping motion: the category's hand-written grasp
    (``models/grasps/<category>_handwritten.yaml``) on the canonical instance.
 3. For each training instance: warp the canonical motion onto it with its CPD
-   field W_i, sample motions around it (``grasping.sampling``: translation
-   ~ N(0, 1.5 cm) <= 4 cm, Shoemake rotations <= 0.2 rad; sample 0 is the
+   field W_i (at the grasp's functional point -- the canonical trigger or
+   handle centre, fixed in the hand -- the hand rigid about it, turned by the
+   field's rotation averaged over 5 cm),
+   sample motions around it (``grasping.sampling``: translation
+   ~ N(0, 1.5 cm) <= 4 cm, Shoemake rotations <= 0.2 rad about the grasp
+   functional point; sample 0 is the
    warped motion itself), drop those violating the functional constraint
    (``grasping.constraints``, judged with the instance's annotations), run
    the rest as grasp trials in the station (``station.trial``; motions whose
@@ -67,6 +71,7 @@ class TrainingConfig:
     lam: float | None = None
     variance: float = 0.95
     ridge_alpha: float = 1e-2
+    grasp_rotation_radius: float = 0.05  # m; see CategoryModel.grasp_rotation_radius
     workers: int | None = None  # None: all cores
     cache_dir: str | None = "out/trial_cache"
 
@@ -114,6 +119,20 @@ class _Candidate:
     motion: GraspMotion
 
 
+def functional_point_in_hand(template: GraspMotion, annotations: dict, region: str) -> np.ndarray:
+    """The canonical instance's functional region centre (trigger, handle) in the hand frame H at the grasp (m).
+
+    This point, fixed in the hand, is the grasp's anchor: it is what the
+    deformation warps (the hand rigid about it) and what the functional
+    constraint keeps near the instance's region.
+    """
+    regions = annotations.get("regions", {})
+    if region not in regions:
+        raise InputError(f"the canonical instance has no {region!r} region annotated; regions: {sorted(regions)}")
+    X = template.pose("grasp")
+    return X[:3, :3].T @ (np.asarray(regions[region]["center"], float) - X[:3, 3])
+
+
 def sample_training_motions(category, space, instances, template, config, annotations, tip_H):
     """Warped + perturbed motions per instance, filtered by the functional constraint."""
     constraint = load_constraint(category)
@@ -121,13 +140,15 @@ def sample_training_motions(category, space, instances, template, config, annota
     candidates: list[_Candidate] = []
     grasp_k = template.pose_names.index("grasp")
     for i, name in enumerate(instances):
-        ref = warp_poses(space.canonical, space.W_train[i], space.beta, template.poses)
+        ref = warp_poses(space.canonical, space.W_train[i], space.beta, template.poses, anchor=tip_H,
+                         rotation_radius=config.grasp_rotation_radius)
+        centre = ref[grasp_k, :3, :3] @ tip_H + ref[grasp_k, :3, 3]  # perturb about the grasp centre
         rng = np.random.default_rng([config.seed, i])
         T = perturbations(rng, config.samples_per_instance, config.sampling)
         T[0] = np.eye(4)  # sample 0: the warped canonical motion itself
         regions = annotations[name].get("regions", {})
         for k in range(config.samples_per_instance):
-            poses = perturb_poses(ref, T[k], ref[grasp_k, :3, 3])
+            poses = perturb_poses(ref, T[k], centre)
             stats[name].sampled += 1
             ok, _ = constraint.check(poses[grasp_k], ref[grasp_k], regions, tip_H)
             if not ok:
@@ -153,7 +174,6 @@ def train_category(
     success (nothing to learn from).
     """
     from catgrasp_drake.data.dataset import instance_clouds, list_instances, load_annotations
-    from catgrasp_drake.robot.kinematics import index_pad_in_hand
     from catgrasp_drake.station.handwritten import load_handwritten_motion
 
     t0 = time.perf_counter()
@@ -172,7 +192,7 @@ def train_category(
 
     template = load_handwritten_motion(category, canonical)
     annotations = {n: load_annotations(category, n) for n in instances}
-    tip_H = index_pad_in_hand(template.posture("closed"))
+    tip_H = functional_point_in_hand(template, annotations[canonical], load_constraint(category).region)
     candidates, stats = sample_training_motions(category, space, instances, template, config, annotations, tip_H)
     specs = [{"task": "grasp_trial", "scenario": f"{category}_default", "category": category,
               "instance": instances[c.instance_index], "motion": c.motion.to_dict()} for c in candidates]
@@ -198,7 +218,8 @@ def train_category(
         if r.get("functional_success"):
             st.functional += 1
             i = cand.instance_index
-            canon = inverse_warp_poses(space.canonical, space.W_train[i], space.beta, cand.motion.poses)
+            canon = inverse_warp_poses(space.canonical, space.W_train[i], space.beta, cand.motion.poses,
+                                       anchor=tip_H, rotation_radius=config.grasp_rotation_radius)
             m = GraspMotion(canon, template.pose_names, dict(template.postures), "object",
                             template.lift_height, template.hold_time)
             X.append(space.latent_train[i])
@@ -226,4 +247,8 @@ def train_category(
     params.pop("cache_dir", None)
     params.pop("workers", None)
     return CategoryModel(category=category, space=space, regressor=regressor, template=template,
-                         instances=tuple(instances), canonical_instance=canonical, params=params, stats=summary)
+                         instances=tuple(instances), canonical_instance=canonical, params=params, stats=summary,
+                         grasp_anchor_H=tuple(float(v) for v in tip_H),
+                         grasp_rotation_radius=config.grasp_rotation_radius,
+                         training_latent=np.array(X), training_descriptors=np.array(Y),
+                         training_groups=np.array(groups, np.int64))

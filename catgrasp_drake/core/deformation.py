@@ -158,19 +158,69 @@ def _check_poses(X) -> tuple[np.ndarray, bool]:
     return X, single
 
 
-def warp_poses(canonical, W, beta, X, *, eps: float | None = None) -> np.ndarray:
+def _check_anchor(anchor) -> np.ndarray:
+    if anchor is None:
+        return np.zeros(3)
+    a = np.asarray(anchor, dtype=np.float64).reshape(-1)
+    if a.shape != (3,) or not np.all(np.isfinite(a)):
+        raise InputError(f"anchor: expected a finite 3-vector (m, in the pose's own frame), got {np.shape(anchor)}")
+    return a
+
+
+def local_rotations(canonical, W, beta, points, radius: float) -> np.ndarray:
+    """Rotations (K, 3, 3) best aligning the canonical points near each of ``points`` with their deformed selves.
+
+    Weighted Procrustes (no scale) with weights ``exp(-|c - p|^2 / (2 radius^2))``
+    over the canonical points c -> f(c): the deformation's rotation averaged
+    over a neighbourhood of ``radius`` (m), robust where the field's
+    Jacobian turns sharply at a thin feature (a trigger, a handle).
+    """
+    C, W, beta = _check_field(canonical, W, beta)
+    P = as_points(points, "points", min_points=0)
+    radius = positive(radius, "radius")
+    D = deform_points(C, W, beta, C)
+    out = np.empty((len(P), 3, 3))
+    for k, p in enumerate(P):
+        w = np.exp(-((C - p) ** 2).sum(axis=1) / (2 * radius**2))
+        if w.sum() < 1e-12:
+            out[k] = np.eye(3)
+            continue
+        w = w / w.sum()
+        mc, md = w @ C, w @ D
+        H = ((C - mc) * w[:, None]).T @ (D - md)
+        U, _, Vt = np.linalg.svd(H)
+        S = np.diag([1.0, 1.0, np.sign(np.linalg.det(Vt.T @ U.T))])
+        out[k] = Vt.T @ S @ U.T
+    return out
+
+
+def warp_poses(canonical, W, beta, X, *, eps: float | None = None, anchor=None,
+               rotation_radius: float | None = None) -> np.ndarray:
     """Warp canonical-frame poses (K, 4, 4) (or one (4, 4)) through the deformation.
 
-    Position ``f(p)``; rotation ``orthonormalize(J(p) R)`` (``eps=None``) or, with
-    ``eps`` > 0, the basis deformed as the points ``p + eps r_i``. The result
-    has proper rotations (det +1).
+    The point warped is the pose's ``anchor`` (3,) -- a point fixed in the
+    posed body (e.g. the grasp centre of a hand whose frame origin is at the
+    wrist), default its origin: ``a = X anchor`` goes to ``f(a)``, the
+    rotation becomes ``orthonormalize(J(a) R)`` (``eps=None``) or, with
+    ``eps`` > 0, the basis deformed as the points ``a + eps r_i``, and the
+    body stays rigid: the new origin is ``f(a) - R' anchor``. The deformation
+    is a local field (Gaussian kernel of width beta); anchoring at the grasp
+    centre moves the hand with the surface it grasps rather than with the
+    field ~10 cm away at its wrist. With ``rotation_radius`` (m) the
+    rotation is instead ``local_rotations(...) R``: the field's rotation
+    averaged over that neighbourhood of the anchor (a hand spans several
+    centimetres; the Jacobian at one point of a thin feature can turn it by
+    30 degrees). Rotations are proper (det +1).
     """
     Xa, single = _check_poses(X)
     C, W, beta = _check_field(canonical, W, beta)
-    p = Xa[:, :3, 3]
+    anc = _check_anchor(anchor)
     R = Xa[:, :3, :3]
+    p = Xa[:, :3, 3] + R @ anc
     fp = deform_points(C, W, beta, p)
-    if eps is None:
+    if rotation_radius is not None:
+        A = local_rotations(C, W, beta, p, rotation_radius) @ R
+    elif eps is None:
         A = jacobian(C, W, beta, p) @ R
     else:
         eps = positive(eps, "eps")
@@ -179,17 +229,22 @@ def warp_poses(canonical, W, beta, X, *, eps: float | None = None) -> np.ndarray
         A = np.swapaxes((fe - fp[:, None, :]) / eps, 1, 2)
     out = np.tile(np.eye(4), (len(Xa), 1, 1))
     out[:, :3, :3] = orthonormalize(A)
-    out[:, :3, 3] = fp
+    out[:, :3, 3] = fp - out[:, :3, :3] @ anc
     return out[0] if single else out
 
 
-def inverse_warp_poses(canonical, W, beta, X, *, tol: float = 1e-9) -> np.ndarray:
-    """Map observed-space poses back to the canonical frame (inverse of :func:`warp_poses`)."""
+def inverse_warp_poses(canonical, W, beta, X, *, tol: float = 1e-9, anchor=None,
+                       rotation_radius: float | None = None) -> np.ndarray:
+    """Map observed-space poses back to the canonical frame (inverse of :func:`warp_poses`, same options)."""
     Xa, single = _check_poses(X)
     C, W, beta = _check_field(canonical, W, beta)
-    p = inverse_deform_points(C, W, beta, Xa[:, :3, 3], tol=tol)
-    J = jacobian(C, W, beta, p)
+    anc = _check_anchor(anchor)
+    a = Xa[:, :3, 3] + Xa[:, :3, :3] @ anc
+    p = inverse_deform_points(C, W, beta, a, tol=tol)
     out = np.tile(np.eye(4), (len(Xa), 1, 1))
-    out[:, :3, :3] = orthonormalize(np.linalg.solve(J, Xa[:, :3, :3]))
-    out[:, :3, 3] = p
+    if rotation_radius is not None:
+        out[:, :3, :3] = np.swapaxes(local_rotations(C, W, beta, p, rotation_radius), 1, 2) @ Xa[:, :3, :3]
+    else:
+        out[:, :3, :3] = orthonormalize(np.linalg.solve(jacobian(C, W, beta, p), Xa[:, :3, :3]))
+    out[:, :3, 3] = p - out[:, :3, :3] @ anc
     return out[0] if single else out

@@ -4,9 +4,11 @@ Sampled motions whose orientation would block or miss the tool's trigger, or
 tilt a mug, are discarded before any simulation. The rules are code; their
 parameters live in ``models/grasps/constraints.yaml``:
 
-* ``trigger`` (drill, spray bottle): at the grasp pose, the index fingertip —
-  a point given in the hand base frame H for the closed posture — must lie
-  within ``max_tip_distance`` metres of the instance's annotated trigger box,
+* ``trigger`` (drill, spray bottle): at the grasp pose, the grasp's
+  functional point ``tip_H`` — a point fixed in the hand base frame H: the
+  canonical trigger centre seen from the canonical grasp (training), or the
+  index finger's pad — must lie within ``max_tip_distance`` metres of the
+  instance's annotated trigger box,
   and the fingers' direction (H +z) must stay within ``max_finger_angle_deg``
   of the reference motion's (so the index finger reaches the trigger from the
   front rather than blocking it from the side).

@@ -206,3 +206,11 @@ class GraspMotion:
         return self.to_dict() == other.to_dict()
 
     __hash__ = None
+
+    # Immutable (read-only arrays, mapping proxy): Drake contexts that copy an
+    # abstract value holding a motion may share it.
+    def __deepcopy__(self, memo):
+        return self
+
+    def __copy__(self):
+        return self

@@ -338,3 +338,26 @@ def make_station(scenario: Scenario, meshcat: Meshcat | None = None) -> Diagram:
     diagram = builder.Build()
     diagram.set_name("station")
     return diagram
+
+
+def make_planning_model(scenario: Scenario):
+    """The robot's planning model of ``scenario``: table + arm + hand, no object, no cameras.
+
+    Returns a ``PlanningModel`` (``catgrasp_drake.systems.trajectory_generator``)
+    whose ``plan(motion_W)`` runs the IK planner; the arm starts at
+    ``scenario.arm_q_home``, the hand open.
+    """
+    from catgrasp_drake.robot.models import add_arm_and_hand, load_hand_postures, make_parser
+    from catgrasp_drake.systems.trajectory_generator import PlanningModel
+
+    builder = DiagramBuilder()
+    plant, scene_graph = AddMultibodyPlant(_plant_config(scenario), builder)
+    parser = make_parser(plant)
+    table = _add_table(plant, scenario)
+    arm_hand = add_arm_and_hand(plant, parser, X_W_ArmBase=RigidTransform(scenario.arm_base.matrix()))
+    plant.Finalize()
+    set_hand_default_posture(plant, arm_hand.hand, load_hand_postures(posture_category(scenario))["open"])
+    diagram = builder.Build()
+    diagram.set_name("planning_model")
+    return PlanningModel(diagram, plant, scene_graph, arm_hand.arm, arm_hand.hand, table,
+                         np.asarray(scenario.arm_q_home, float))

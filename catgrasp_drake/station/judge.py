@@ -12,9 +12,12 @@ the simulation (``ContactResults`` and body poses) at three instants:
 Rules (first failing rule names ``failure_reason``):
 
 1. ``collision_before_closing``: before closing, a robot body (arm or hand)
-   touches the table, or the object has been pushed by more than
-   ``push_tolerance`` (2 cm) or tilted by more than ``push_tilt_deg`` (10°)
-   from its initial pose.
+   touches the table, or the object has been knocked away: pushed by more
+   than ``push_tolerance`` (4 cm, the sampling's largest offset) or tipped
+   (its z axis turned) by more than ``push_tilt_deg`` (30°) from its initial
+   pose. Smaller nudges and turns about the vertical (fingers brushing a
+   light bottle on the reach) are not failures by themselves: DESIGN.md's
+   success definition judges the outcome at the end of the hold.
 2. At the end of the hold, with ``partners`` = the model instances touching
    the object:
    - no hand contact: ``dropped`` if the object had risen by at least half
@@ -92,8 +95,8 @@ class JudgeSpec:
     regions: dict = field(default_factory=dict)  # name -> {"center": [3], "half_extents": [3]} in O
     lift_height: float = 0.12
     region_margin: float = 0.005
-    push_tolerance: float = 0.02
-    push_tilt_deg: float = 10.0
+    push_tolerance: float = 0.04
+    push_tilt_deg: float = 30.0
     max_tilt_deg: float = 15.0
 
 
@@ -186,10 +189,12 @@ def judge(spec: JudgeSpec, initial: Snapshot, before_close: Snapshot, after_lift
             robot_body = c.other(spec.table_model)
             return verdict(False, False, "collision_before_closing", f"{robot_body} touches the table")
     push = float(np.linalg.norm(np.asarray(before_close.X_WO)[:3, 3] - np.asarray(initial.X_WO)[:3, 3]))
-    turn = rotation_deg(initial.X_WO, before_close.X_WO)
-    if push > spec.push_tolerance or turn > spec.push_tilt_deg:
+    tipped = tilt_deg(initial.X_WO, before_close.X_WO)
+    if push > spec.push_tolerance or tipped > spec.push_tilt_deg:
+        turn = rotation_deg(initial.X_WO, before_close.X_WO)
         return verdict(False, False, "collision_before_closing",
-                       f"object pushed {push * 100:.1f} cm / {turn:.0f} deg before closing")
+                       f"object pushed {push * 100:.1f} cm, tipped {tipped:.0f} deg "
+                       f"(turned {turn:.0f} deg) before closing")
 
     # 2. grasp success at the end of the hold
     partners = object_partners(end.contacts, spec.object_model)

@@ -426,3 +426,26 @@ def load_scenario(name: str, path: str | Path = DEFAULT_SCENARIO_FILE) -> Scenar
         known = ", ".join(map(str, data)) if isinstance(data, dict) else "none"
         raise InputError(f"unknown scenario {name!r} in {path.name}; known: {known}")
     return scenario_from_dict(name, data[name])
+
+
+def with_instance(scenario: Scenario, instance: str, category: str | None = None) -> Scenario:
+    """``scenario`` with its object replaced by a data-set instance (same placement)."""
+    obj = dataclasses.replace(scenario.object, instance=instance, primitive=None,
+                              category=category or scenario.object.category)
+    return scenario.replace(name=f"{scenario.name}:{instance}", object=obj)
+
+
+def random_placement(scenario: Scenario, seed: int, *, yaw_range_deg: float = 20.0,
+                     shift_m: float = 0.03) -> Scenario:
+    """``scenario`` with its object moved by a seeded random yaw (uniform, +-``yaw_range_deg`` about
+    its yaw) and shift (uniform, +-``shift_m`` in x and y of the table frame).
+
+    The default ranges keep the functional side (trigger, handle) within the
+    right hand's reach; the same seed always gives the same placement.
+    """
+    rng = np.random.default_rng([int(seed), 20181])
+    o = scenario.object
+    dyaw = float(rng.uniform(-yaw_range_deg, yaw_range_deg))
+    dx, dy = (float(v) for v in rng.uniform(-shift_m, shift_m, size=2))
+    obj = dataclasses.replace(o, xyz=(o.xyz[0] + dx, o.xyz[1] + dy, o.xyz[2]), yaw_deg=o.yaw_deg + dyaw)
+    return scenario.replace(name=f"{scenario.name}@seed{seed}", object=obj)

@@ -166,26 +166,26 @@ def trial_diagram(scenario: Scenario, meshcat: Meshcat | None = None) -> TrialDi
     return td
 
 
-def judge_spec(td: TrialDiagram, motion: GraspMotion) -> JudgeSpec:
+def judge_spec(station: StationHandles, lift_height: float) -> JudgeSpec:
+    """The judge's view of ``station``: model names, the object's annotated regions, the lift height (m)."""
     from catgrasp_drake.robot.models import INDEX_DISTAL_LINK
 
-    h = td.station
-    plant = h.plant
-    scenario = h.scenario
+    plant = station.plant
+    scenario = station.scenario
     regions = {}
     if scenario.object.category is not None:
         from catgrasp_drake.data.dataset import load_annotations
 
         regions = load_annotations(scenario.object.category, scenario.object.instance).get("regions", {})
     return JudgeSpec(
-        object_model=plant.GetModelInstanceName(h.object_instance),
-        hand_model=h.hand_name,
-        arm_model=h.arm_name,
-        table_model=plant.GetModelInstanceName(h.table),
-        index_distal_body=f"{h.hand_name}::{INDEX_DISTAL_LINK}",
+        object_model=plant.GetModelInstanceName(station.object_instance),
+        hand_model=station.hand_name,
+        arm_model=station.arm_name,
+        table_model=plant.GetModelInstanceName(station.table),
+        index_distal_body=f"{station.hand_name}::{INDEX_DISTAL_LINK}",
         category=scenario.object.category,
         regions=regions,
-        lift_height=motion.lift_height,
+        lift_height=lift_height,
     )
 
 
@@ -202,8 +202,8 @@ def plan_for(td: TrialDiagram, motion_W: GraspMotion, params: PlanParams = PlanP
 
 
 # ----------------------------------------------------------------------------- the trial
-def _snapshot(td: TrialDiagram, context) -> Snapshot:
-    h = td.station
+def station_snapshot(h: StationHandles, context) -> Snapshot:
+    """The object's pose and all contacts in the root ``context`` of a diagram holding station ``h``."""
     plant_ctx = h.plant.GetMyContextFromRoot(context)
     X_WO = h.plant.EvalBodyPoseInWorld(plant_ctx, h.object_body).GetAsMatrix4()
     results = h.plant.get_contact_results_output_port().Eval(plant_ctx)
@@ -234,7 +234,7 @@ def run_grasp_trial(scenario: Scenario, motion_O: GraspMotion, *, meshcat: Meshc
     td = trial_diagram(scenario, meshcat)
     X_WO0 = scenario.X_WO()
     motion_W = motion_O.in_world(X_WO0)
-    spec = judge_spec(td, motion_O)
+    spec = judge_spec(td.station, motion_O.lift_height)
     plan = plan_for(td, motion_W, params)
 
     def result(verdict: Verdict, X_final, snapshot_end: Snapshot | None, sim_time: float) -> TrialResult:
@@ -257,32 +257,48 @@ def run_grasp_trial(scenario: Scenario, motion_O: GraspMotion, *, meshcat: Meshc
 
     context = td.diagram.CreateDefaultContext()
     td.generator.set_plan(td.generator.GetMyMutableContextFromRoot(context), plan)
-    simulator = Simulator(td.diagram, context)
+    verdict, X_final, end, sim_time = simulate_and_judge(td.diagram, context, td.station, plan.timeline, spec,
+                                                         meshcat=meshcat, record_html=record_html)
+    return result(verdict, X_final, end, sim_time)
+
+
+def simulate_and_judge(diagram, context, station: StationHandles, timeline, spec: JudgeSpec, *,
+                       meshcat: Meshcat | None = None, record_html=None, initialize_params=None):
+    """Simulate ``diagram`` from ``context`` to ``timeline.end`` and judge the grasp.
+
+    Snapshots are taken at the start, at ``timeline.close``, ``timeline.hold``
+    and ``timeline.end``. A solver failure inside the plant becomes a
+    ``simulation_error`` verdict, never an exception. With the station's
+    Meshcat visualizer the run is recorded (and written to ``record_html``).
+    Returns ``(verdict, X_WO_final, end_snapshot or None, simulated_time_s)``.
+    """
+    simulator = Simulator(diagram, context)
     simulator.set_target_realtime_rate(0.0)
-    visualizer = td.station.meshcat_visualizer
+    visualizer = station.meshcat_visualizer
     if visualizer is not None:
         visualizer.DeleteRecording()
         visualizer.StartRecording(False)
-    tl = plan.timeline
     try:
-        simulator.Initialize()
-        initial = _snapshot(td, context)
-        simulator.AdvanceTo(tl.close)
-        before_close = _snapshot(td, context)
-        simulator.AdvanceTo(tl.hold)
-        after_lift = _snapshot(td, context)
-        simulator.AdvanceTo(tl.end)
-        end = _snapshot(td, context)
+        if initialize_params is None:
+            simulator.Initialize()
+        else:
+            simulator.Initialize(initialize_params)
+        initial = station_snapshot(station, context)
+        simulator.AdvanceTo(timeline.close)
+        before_close = station_snapshot(station, context)
+        simulator.AdvanceTo(timeline.hold)
+        after_lift = station_snapshot(station, context)
+        simulator.AdvanceTo(timeline.end)
+        end = station_snapshot(station, context)
     except RuntimeError as e:  # a solver failure inside the plant: report, never raise
-        X = td.station.plant.EvalBodyPoseInWorld(td.station.plant.GetMyContextFromRoot(context),
-                                                 td.station.object_body).GetAsMatrix4()
-        return result(Verdict(False, False, "simulation_error", str(e).splitlines()[0][:200]), X, None,
-                      context.get_time())
+        X = station.plant.EvalBodyPoseInWorld(station.plant.GetMyContextFromRoot(context),
+                                              station.object_body).GetAsMatrix4()
+        return (Verdict(False, False, "simulation_error", str(e).splitlines()[0][:200]), X, None,
+                context.get_time())
     finally:
         if visualizer is not None:
             visualizer.StopRecording()
             visualizer.PublishRecording()
-            if record_html is not None:
+            if record_html is not None and meshcat is not None:
                 atomic_write_text(record_html, meshcat.StaticHtml())
-    verdict = judge(spec, initial, before_close, after_lift, end)
-    return result(verdict, end.X_WO, end, context.get_time())
+    return judge(spec, initial, before_close, after_lift, end), end.X_WO, end, context.get_time()

@@ -242,13 +242,14 @@ def _interp_poses(X_A: RigidTransform, X_B: RigidTransform, n: int) -> list[Rigi
 
 # ----------------------------------------------------------------------------- planner
 def plan_grasp(plant: MultibodyPlant, plant_context, scene_graph, sg_context, *, arm: ModelInstanceIndex,
-               hand: ModelInstanceIndex, object_instance: ModelInstanceIndex, table: ModelInstanceIndex,
+               hand: ModelInstanceIndex, object_instance: ModelInstanceIndex | None, table: ModelInstanceIndex,
                motion_W: GraspMotion, q_arm_start, params: PlanParams = PlanParams()) -> GraspPlan:
     """Plan the joint trajectories executing ``motion_W`` (poses in the WORLD frame).
 
     ``plant_context``/``sg_context`` must be a SCRATCH context of the diagram
     holding ``plant`` and ``scene_graph`` (its positions and collision
-    filters are modified). Never raises for unreachable or colliding poses:
+    filters are modified). ``object_instance`` None: a planning model without
+    the object (robot vs table only). Never raises for unreachable or colliding poses:
     the returned plan's ``status`` says what failed.
     """
     import time
@@ -282,7 +283,7 @@ def plan_grasp(plant: MultibodyPlant, plant_context, scene_graph, sg_context, *,
     shoulder_W = shoulder.CalcPoseInWorld(plant_context).translation()
     frame_wrist = plant.GetJointByName(ARM_JOINTS[3], arm).child_body().body_frame()
     c = _Ctx(plant, plant_context, sg_context, scene_graph, arm_q_idx, hand_q_idx, frame_H, frame_wrist, q_full,
-             _geometry_set(plant, scene_graph, [arm, hand]), _geometry_set(plant, scene_graph, [object_instance]),
+             _geometry_set(plant, scene_graph, [arm, hand]), _geometry_set(plant, scene_graph, [object_instance] if object_instance is not None else []),
              _geometry_set(plant, scene_graph, [table]), shoulder_W)
 
     # Planning-only collision filters: robot vs itself and object vs table never count.
@@ -295,17 +296,30 @@ def plan_grasp(plant: MultibodyPlant, plant_context, scene_graph, sg_context, *,
         if np.linalg.norm(X_WH.translation() - shoulder_W) > params.max_reach:
             return fail(f"unreachable: {name}")
 
-    # --- pregrasp: wrist up if feasible; collision-free (min-distance IK) if the first solution collides
-    ok, q_pre_arm = _ik(c, X["pregrasp"], q_arm_start, params, wrist_up=True)
-    if not ok:
-        ok, q_pre_arm = _ik(c, X["pregrasp"], q_arm_start, params)
-    if not ok:
-        return fail("ik_failed: pregrasp")
-    if _robot_collides(c, q_pre_arm):
-        ok, q_free = _ik(c, X["pregrasp"], q_pre_arm, params, min_distance=params.min_distance)
-        if not ok or _robot_collides(c, q_free):
-            return fail(f"collision: pregrasp ({'; '.join(_collisions(c, q_pre_arm)[:3])})")
-        q_pre_arm = q_free
+    # --- pregrasp: the first collision-free IK solution of, in order: wrist up, wrist up with minimum
+    # distance, free with minimum distance; each from the start configuration, from the start with the
+    # elbow raised and from that with the wrist turned over (SNOPT is local: one seed can be stuck on the
+    # branch that lays the forearm on the table, or twists the wrist under a hand working low)
+    lift = np.array([0.0, -0.4, 0.6, -0.2, 0.0, 0.0])
+    flip = np.array([0.0, 0.0, 0.0, 0.0, 0.85 * np.pi, 1.5 * np.pi])
+    seeds = (q_arm_start, q_arm_start + lift, q_arm_start + lift + flip)
+    q_pre_arm, first = None, None
+    for wrist_up, min_distance in ((True, None), (True, params.min_distance), (False, None),
+                                   (False, params.min_distance)):
+        for seed in seeds:
+            ok, q = _ik(c, X["pregrasp"], seed, params, min_distance=min_distance, wrist_up=wrist_up)
+            if not ok:
+                continue
+            first = q if first is None else first
+            if not _robot_collides(c, q):
+                q_pre_arm = q
+                break
+        if q_pre_arm is not None:
+            break
+    if q_pre_arm is None:
+        if first is None:
+            return fail("ik_failed: pregrasp")
+        return fail(f"collision: pregrasp ({'; '.join(_collisions(c, first)[:3])})")
 
     # --- home -> pregrasp: check samples, else go through a via pose above the pregrasp
     approach_knots = [q_pre_arm]
@@ -488,3 +502,114 @@ class _PlanCache:
 
     def __copy__(self):
         return self
+
+
+# ----------------------------------------------------------------------------- transfer: plan from an input motion
+@dataclass
+class PlanningModel:
+    """The robot's own model of the world for planning: arm, hand and table (no object).
+
+    Built by ``catgrasp_drake.station.builder.make_planning_model``; the
+    robot knows the table but only sees the object through its cloud, so the
+    plan checks robot vs table, and the reach brings the hand to the object.
+    """
+
+    diagram: object
+    plant: MultibodyPlant
+    scene_graph: object
+    arm: ModelInstanceIndex
+    hand: ModelInstanceIndex
+    table: ModelInstanceIndex
+    q_arm_start: np.ndarray
+
+    def plan(self, motion_W: GraspMotion, params: PlanParams = PlanParams()) -> GraspPlan:
+        """:func:`plan_grasp` of ``motion_W`` on a fresh scratch context."""
+        ctx = self.diagram.CreateDefaultContext()
+        return plan_grasp(self.plant, self.plant.GetMyMutableContextFromRoot(ctx), self.scene_graph,
+                          self.scene_graph.GetMyMutableContextFromRoot(ctx), arm=self.arm, hand=self.hand,
+                          object_instance=None, table=self.table, motion_W=motion_W,
+                          q_arm_start=self.q_arm_start, params=params)
+
+
+def refusal_status(confidence: float, min_confidence: float) -> str | None:
+    """Why a transferred grasp is refused (``None``: go ahead)."""
+    if not np.isfinite(confidence) or confidence <= 0.0:
+        return "refused: no shape estimate (confidence 0): take another view"
+    if confidence < min_confidence:
+        return f"refused: low confidence ({confidence:.2f} < {min_confidence:.2f}): take another view"
+    return None
+
+
+class MotionTrajectoryGenerator(LeafSystem):
+    """Plans a grasping motion given on an input port and plays the plan back.
+
+    Input ports:
+        grasp_motion_W: ``GraspMotion`` (frame "world"): hand-base control
+            poses X_WH and postures, e.g. from ``GraspRegressor``.
+        confidence: (1,) the shape estimate's confidence in [0, 1] (optional;
+            unconnected = 1). Below ``min_confidence`` (or 0: no estimate) the
+            motion is refused: the plan holds the start configuration with the
+            hand open and its status says "refused: ... take another view".
+    Output ports:
+        plan: ``GraspPlan`` (joint knots, timeline, status).
+        arm_desired_state: [q; v] (2 * 6) of the arm, actuator order, rad and rad/s.
+        hand_desired_state: [q; v] (2 * 9) of the hand's actuated joints, actuator order.
+        plan_status: str, "ok" or why there is no motion.
+    Evaluation model: the plan is a cache entry that depends on the input
+    ports only, so IK runs once per motion (at the first evaluation) and every
+    simulation step reuses it. The plan's time 0 is the simulation's time 0.
+    """
+
+    def __init__(self, plant: MultibodyPlant, arm: ModelInstanceIndex, hand: ModelInstanceIndex,
+                 planning_model: PlanningModel, *, params: PlanParams = PlanParams(), min_confidence: float = 0.0):
+        super().__init__()
+        from pydrake.systems.framework import ValueProducer
+
+        from catgrasp_drake.robot.models import ARM_JOINTS, HAND_ACTUATED_JOINTS
+
+        if not 0.0 <= float(min_confidence) <= 1.0:
+            raise InputError(f"min_confidence: expected a value in [0, 1], got {min_confidence}")
+        self._arm_perm = _actuator_order(plant, arm, ARM_JOINTS)
+        self._hand_perm = _actuator_order(plant, hand, HAND_ACTUATED_JOINTS)
+        self._planning = planning_model
+        self._params = params
+        self._min_conf = float(min_confidence)
+        self._motion_in = self.DeclareAbstractInputPort("grasp_motion_W", AbstractValue.Make(
+            GraspMotion(np.tile(np.eye(4), (2, 1, 1)), postures={k: np.zeros(9) for k in
+                                                                  ("open", "preshape", "closed")}, frame="world")))
+        self._conf_in = self.DeclareVectorInputPort("confidence", 1)
+        q_open = np.zeros(9)
+        self._idle = _PlanCache(hold_plan(planning_model.q_arm_start, q_open, "no motion"))
+        self._cache = self.DeclareCacheEntry(
+            "plan", ValueProducer(allocate=AbstractValue.Make(self._idle).Clone, calc=self._calc_plan),
+            {self.all_input_ports_ticket()})
+        na, nh = len(self._arm_perm), len(self._hand_perm)
+        self.DeclareAbstractOutputPort("plan", lambda: AbstractValue.Make(self._idle.plan),
+                                       lambda c, o: o.set_value(self._plan_cache(c).plan),
+                                       prerequisites_of_calc={self._cache.ticket()})
+        self.DeclareVectorOutputPort("arm_desired_state", 2 * na, self._calc_arm)
+        self.DeclareVectorOutputPort("hand_desired_state", 2 * nh, self._calc_hand)
+        self.DeclareAbstractOutputPort("plan_status", lambda: AbstractValue.Make(""),
+                                       lambda c, o: o.set_value(self._plan_cache(c).plan.status),
+                                       prerequisites_of_calc={self._cache.ticket()})
+
+    def _plan_cache(self, context) -> _PlanCache:
+        return self._cache.Eval(context)
+
+    def _calc_plan(self, context, value):
+        motion = self._motion_in.Eval(context)
+        conf = float(self._conf_in.Eval(context)[0]) if self._conf_in.HasValue(context) else 1.0
+        refusal = refusal_status(conf, self._min_conf)
+        if refusal is not None:
+            plan = hold_plan(self._planning.q_arm_start, motion.posture("open"), refusal)
+        else:
+            plan = self._planning.plan(motion, self._params)
+        value.set_value(_PlanCache(plan))
+
+    def _calc_arm(self, context, output: BasicVector):
+        p = GraspTrajectoryGenerator._state_perm(self._arm_perm)
+        output.SetFromVector(self._plan_cache(context).arm_state(context.get_time())[p])
+
+    def _calc_hand(self, context, output: BasicVector):
+        p = GraspTrajectoryGenerator._state_perm(self._hand_perm)
+        output.SetFromVector(self._plan_cache(context).hand_state(context.get_time())[p])

@@ -86,6 +86,50 @@ def test_warped_rotations_are_proper_and_inverse_warp_round_trips(field):
     assert warp_poses(C, W, BETA, X[0]).shape == (4, 4)
 
 
+def test_anchored_warp_moves_the_anchor_with_the_field_and_keeps_the_body_rigid(field):
+    """A hand frame 15 cm from the surface, anchored at a surface point it grasps."""
+    C, W, _ = field
+    rng = np.random.default_rng(2)
+    anchor = np.array([0.0, 0.03, 0.15])  # grasp centre in the hand frame (m)
+    X = np.tile(np.eye(4), (10, 1, 1))
+    X[:, :3, :3] = quat_to_matrix(shoemake_quaternions(rng, 10))
+    grasped = C[rng.choice(len(C), 10)]
+    X[:, :3, 3] = grasped - X[:, :3, :3] @ anchor  # the anchor sits on the surface
+    Xw = warp_poses(C, W, BETA, X, anchor=anchor)
+    a_w = Xw[:, :3, 3] + Xw[:, :3, :3] @ anchor
+    assert np.allclose(a_w, deform_points(C, W, BETA, grasped))  # the anchor follows the surface
+    unanchored = warp_poses(C, W, BETA, X)
+    # the origin (15 cm away, where the field has died out) would not have followed
+    moved = np.linalg.norm(deform_points(C, W, BETA, grasped) - grasped, axis=1)
+    miss = np.linalg.norm(unanchored[:, :3, 3] + unanchored[:, :3, :3] @ anchor - a_w, axis=1)
+    assert moved.max() > 1e-3 and miss.max() > 0.5 * moved.max()
+    back = inverse_warp_poses(C, W, BETA, Xw, anchor=anchor)
+    assert np.abs(back[:, :3, 3] - X[:, :3, 3]).max() < 1e-8
+    assert rotation_angle(back[:, :3, :3] @ np.swapaxes(X[:, :3, :3], 1, 2)).max() < 1e-7
+    with pytest.raises(InputError, match="anchor"):
+        warp_poses(C, W, BETA, X, anchor=[0.0, np.nan, 0.0])
+
+
+def test_local_rotations_recover_a_rigid_rotation_of_the_neighbourhood():
+    """Build W so that the canonical points near the origin rotate rigidly by 20 deg about z."""
+    from catgrasp_drake.core.cpd import gaussian_kernel
+    from catgrasp_drake.core.deformation import local_rotations
+    from catgrasp_drake.core.rotations import rotz
+
+    rng = np.random.default_rng(3)
+    C = rng.uniform(-0.05, 0.05, size=(150, 3))
+    R = rotz(np.radians(20))
+    W = np.linalg.solve(gaussian_kernel(C, C, BETA) + 1e-10 * np.eye(len(C)), C @ R.T - C)
+    assert np.allclose(deform_points(C, W, BETA, C), C @ R.T, atol=1e-6)
+    Rl = local_rotations(C, W, BETA, np.zeros((1, 3)), 0.03)[0]
+    assert rotation_angle(Rl @ R.T) < np.radians(0.5)
+    X = np.eye(4)
+    Xw = warp_poses(C, W, BETA, X, anchor=[0.0, 0.0, 0.0], rotation_radius=0.03)
+    assert rotation_angle(Xw[:3, :3] @ R.T) < np.radians(0.5)
+    back = inverse_warp_poses(C, W, BETA, Xw, anchor=[0.0, 0.0, 0.0], rotation_radius=0.03)
+    assert np.allclose(back, X, atol=1e-8)
+
+
 def test_bad_inputs(field):
     C, W, _ = field
     with pytest.raises(InputError, match="W"):

@@ -87,8 +87,18 @@ def test_collision_before_closing_table():
 
 
 def test_collision_before_closing_push():
-    v = judge(_spec(), *_snaps(X_before=_X((0.68, 0.0, 0.0))))
+    v = judge(_spec(), *_snaps(X_before=_X((0.70, 0.0, 0.0))))
     assert v.failure_reason == "collision_before_closing" and "pushed" in v.detail
+
+
+def test_tipped_before_closing_fails_but_turn_about_vertical_does_not():
+    v = judge(_spec(), *_snaps(X_before=_X(roll=np.radians(35))))
+    assert v.failure_reason == "collision_before_closing" and "tipped 35 deg" in v.detail
+    v = judge(_spec(), *_snaps(X_before=_X(roll=np.radians(15))))  # nudged, then held: the outcome decides
+    assert v.functional_success
+    # brushed round 25 deg on the table, then grasped and held: judged by the outcome
+    v = judge(_spec(), *_snaps(X_before=_X(yaw=np.radians(25))))
+    assert v.grasp_success and v.functional_success
 
 
 def test_dropped_and_not_lifted():

@@ -67,5 +67,10 @@ def test_transfer_with_identity_pose_equals_the_warped_motion(small_model):
     assert np.allclose(warped.poses, moved.poses)
     R = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
     world = model.transfer(x, R, np.array([0.5, 0.0, 0.0]), 1.1)
-    assert np.allclose(world.poses[:, :3, 3], 1.1 * warped.poses[:, :3, 3] @ R.T + [0.5, 0, 0])
     assert np.allclose(world.poses[:, :3, :3], R @ warped.poses[:, :3, :3])
+    # the grasp centre (anchor) is scaled with the object; the hand stays rigid about it
+    a = np.asarray(model.grasp_anchor_H)
+    centre = lambda P: P[:, :3, 3] + P[:, :3, :3] @ a  # noqa: E731
+    assert np.allclose(centre(world.poses), 1.1 * centre(warped.poses) @ R.T + [0.5, 0, 0])
+    dist = np.linalg.norm(world.poses[:, :3, 3] - centre(world.poses), axis=1)
+    assert np.allclose(dist, np.linalg.norm(a))

@@ -1,0 +1,186 @@
+"""The latent shape estimator: object cloud in the world -> latent shape x and object pose (Alg. 2, line 1).
+
+The maths is :func:`catgrasp_drake.core.inference.infer_latent_pose`; this
+module only changes frames (:func:`estimate_on_table`, a pure function) and
+moves data between ports and arrays (:class:`LatentShapeEstimator`).
+
+Frames: world W; table top T (z up, the support surface at z = 0), in which
+the fit runs so that the core's yaw search turns the model about the
+vertical; canonical object frame O (DESIGN.md section 3). The fit gives a
+similarity p_T = s R_TO p_O + p_TO; the object pose is its rigid part
+``X_WO = X_WT [R_TO, p_TO]`` and ``s`` the scale, so a canonical-frame point
+p_O lands at ``X_WO (s p_O)`` in W.
+
+Evaluation model: the estimate is ABSTRACT STATE, written by an
+initialization event (the camera sees the object at rest on the table when
+the simulation starts); ``estimate_now(context)`` runs the fit on demand
+without touching the state (benchmarks, re-perception by a caller, who can
+write it with ``set_estimate``). Every output port reads that state only, so
+Drake caches the outputs and the fit (100-300 ms) never runs again while the
+simulation steps -- unlike an output computed from the cloud, which would
+follow the camera's rendering of every step.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from pydrake.common.value import AbstractValue
+from pydrake.math import RigidTransform, RotationMatrix
+from pydrake.perception import PointCloud
+from pydrake.systems.framework import BasicVector, EventStatus, LeafSystem
+
+from catgrasp_drake.core.inference import InferenceResult, infer_latent_pose
+from catgrasp_drake.core.shape_space import ShapeSpace
+from catgrasp_drake.errors import CatgraspError, InputError
+from catgrasp_drake.systems.object_cloud import cloud_from_points, points_from_cloud
+
+#: Fewer observed points than this: no estimate ("no object in view").
+MIN_OBSERVED_POINTS = 30
+
+
+@dataclass(frozen=True, eq=False)
+class ShapeEstimate:
+    """One latent shape + pose estimate, in the world frame.
+
+    ``ok`` False means no estimate could be made (``status`` says why) and
+    every other field holds its neutral value (x = 0, identity pose,
+    confidence 0). ``X_WO`` 4x4 rigid; ``scale`` dimensionless;
+    ``completed_W`` (M, 3) metres; ``result`` the core's result in the
+    table frame T; ``timing`` seconds.
+    """
+
+    ok: bool
+    status: str
+    x: np.ndarray
+    X_WO: np.ndarray
+    scale: float
+    completed_W: np.ndarray
+    energy: float
+    confidence: float
+    observed_W: np.ndarray
+    result: InferenceResult | None = None
+    timing: dict = field(default_factory=dict)
+
+    # Contexts deep-copy abstract state; an estimate is never mutated (and holds the shape space).
+    def __deepcopy__(self, memo):
+        return self
+
+    def __copy__(self):
+        return self
+
+
+def failed_estimate(q: int, status: str, observed_W=np.zeros((0, 3))) -> ShapeEstimate:
+    return ShapeEstimate(False, status, np.zeros(q), np.eye(4), 1.0, np.zeros((0, 3)), float("inf"), 0.0,
+                         np.asarray(observed_W, float).reshape(-1, 3))
+
+
+def estimate_on_table(space: ShapeSpace, p_W: np.ndarray, X_WT: np.ndarray, *, camera_W=None,
+                      yaw_candidates=8, **inference_kwargs) -> ShapeEstimate:
+    """Fit ``space`` to the object points ``p_W`` (N, 3, world) standing on the table frame ``X_WT`` (4x4).
+
+    ``camera_W`` (3,) the camera position in W for the visibility-aware
+    E-step (a single view), or None (a full cloud). ``yaw_candidates`` as in
+    ``infer_latent_pose`` (unknown yaw: 8 starts). Too few points give a
+    failed estimate (``ok`` False), never an exception; bad arguments raise
+    InputError.
+    """
+    p_W = np.asarray(p_W, float).reshape(-1, 3)
+    p_W = p_W[np.all(np.isfinite(p_W), axis=1)]
+    if len(p_W) < MIN_OBSERVED_POINTS:
+        return failed_estimate(space.q, f"no object in view ({len(p_W)} points < {MIN_OBSERVED_POINTS})", p_W)
+    X_WT = np.asarray(X_WT, float)
+    R_WT, p_WT = X_WT[:3, :3], X_WT[:3, 3]
+    p_T = (p_W - p_WT) @ R_WT  # R_TW = R_WT^T
+    cam_T = None if camera_W is None else (np.asarray(camera_W, float) - p_WT) @ R_WT
+    try:
+        r = infer_latent_pose(space, p_T, camera_position=cam_T, yaw_candidates=yaw_candidates, **inference_kwargs)
+    except CatgraspError as e:
+        return failed_estimate(space.q, f"estimate failed: {e}", p_W)
+    X_TO = np.eye(4)
+    X_TO[:3, :3], X_TO[:3, 3] = r.R, r.t
+    completed_W = r.completed @ R_WT.T + p_WT
+    return ShapeEstimate(True, "ok", r.x.copy(), X_WT @ X_TO, float(r.s), completed_W, float(r.energy),
+                         float(r.confidence), p_W, r, dict(r.timing))
+
+
+class LatentShapeEstimator(LeafSystem):
+    """Latent shape x and object pose from the object's point cloud (module docstring: frames, events).
+
+    Input ports:
+        object_cloud_W: ``PointCloud`` (xyz, metres, world frame W), the segmented object.
+        camera_pose: ``RigidTransform`` X_WC of the camera (single view: its
+            position turns on the visibility-aware fit); leave it
+            unconnected for a full (multi-view) cloud.
+    Output ports:
+        x: latent vector (q,), whitened (N(0, I) over the category).
+        X_WO: ``RigidTransform``, rigid part of the fitted pose of the canonical frame O in W.
+        scale: (1,) uniform scale s of the canonical shape.
+        completed_cloud_W: ``PointCloud``, the completed shape in W (metres).
+        energy: (1,) final fit energy (negative log-likelihood + prior).
+        confidence: (1,) in [0, 1]; 0 when there is no estimate.
+        estimate: ``ShapeEstimate`` (everything above plus status and timings).
+    Parameters (constructor): the category's ``ShapeSpace``, the table pose
+    ``X_WT`` (4x4), ``yaw_candidates`` (8: unknown yaw) and extra keyword
+    arguments for ``infer_latent_pose``.
+    """
+
+    def __init__(self, space: ShapeSpace, X_WT, *, yaw_candidates=8, **inference_kwargs):
+        super().__init__()
+        if not isinstance(space, ShapeSpace):
+            raise InputError(f"space: expected a ShapeSpace, got {type(space).__name__}")
+        self._space = space
+        self._X_WT = np.asarray(X_WT.GetAsMatrix4() if isinstance(X_WT, RigidTransform) else X_WT, float)
+        if self._X_WT.shape != (4, 4):
+            raise InputError(f"X_WT: expected a 4x4 pose, got shape {self._X_WT.shape}")
+        self._yaws = yaw_candidates
+        self._kwargs = dict(inference_kwargs)
+        self._cloud_in = self.DeclareAbstractInputPort("object_cloud_W", AbstractValue.Make(PointCloud()))
+        self._camera_in = self.DeclareAbstractInputPort("camera_pose", AbstractValue.Make(RigidTransform()))
+        self._state = self.DeclareAbstractState(AbstractValue.Make(failed_estimate(space.q, "not yet estimated")))
+        self.DeclareInitializationUnrestrictedUpdateEvent(self._update)
+        state_only = {self.abstract_state_ticket(self._state)}
+        q = space.q
+        self.DeclareVectorOutputPort("x", q, lambda c, o: o.SetFromVector(self._get(c).x),
+                                     prerequisites_of_calc=state_only)
+        self.DeclareAbstractOutputPort("X_WO", lambda: AbstractValue.Make(RigidTransform()),
+                                       lambda c, o: o.set_value(RigidTransform(self._get(c).X_WO)),
+                                       prerequisites_of_calc=state_only)
+        self.DeclareVectorOutputPort("scale", 1, lambda c, o: o.SetFromVector([self._get(c).scale]),
+                                     prerequisites_of_calc=state_only)
+        self.DeclareAbstractOutputPort("completed_cloud_W", lambda: AbstractValue.Make(PointCloud()),
+                                       lambda c, o: o.set_value(cloud_from_points(self._get(c).completed_W)),
+                                       prerequisites_of_calc=state_only)
+        self.DeclareVectorOutputPort("energy", 1, lambda c, o: o.SetFromVector([self._get(c).energy]),
+                                     prerequisites_of_calc=state_only)
+        self.DeclareVectorOutputPort("confidence", 1, lambda c, o: o.SetFromVector([self._get(c).confidence]),
+                                     prerequisites_of_calc=state_only)
+        self.DeclareAbstractOutputPort("estimate", lambda: AbstractValue.Make(failed_estimate(q, "")),
+                                       lambda c, o: o.set_value(self._get(c)), prerequisites_of_calc=state_only)
+
+    @property
+    def space(self) -> ShapeSpace:
+        return self._space
+
+    def _get(self, context) -> ShapeEstimate:
+        return context.get_abstract_state(int(self._state)).get_value()
+
+    def estimate_now(self, context) -> ShapeEstimate:
+        """Run the fit on the current input cloud (does not change the state)."""
+        p_W = points_from_cloud(self._cloud_in.Eval(context))
+        camera_W = None
+        if self._camera_in.HasValue(context):
+            camera_W = self._camera_in.Eval(context).translation()
+        return estimate_on_table(self._space, p_W, self._X_WT, camera_W=camera_W,
+                                 yaw_candidates=self._yaws, **self._kwargs)
+
+    def set_estimate(self, context, estimate: ShapeEstimate) -> None:
+        """Write ``estimate`` into this system's state in ``context``."""
+        if not isinstance(estimate, ShapeEstimate):
+            raise InputError(f"estimate: expected a ShapeEstimate, got {type(estimate).__name__}")
+        context.get_mutable_abstract_state(int(self._state)).set_value(estimate)
+
+    def _update(self, context, state):
+        state.get_mutable_abstract_state(int(self._state)).set_value(self.estimate_now(context))
+        return EventStatus.Succeeded()

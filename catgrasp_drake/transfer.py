@@ -1,0 +1,306 @@
+"""The grasp transfer diagram (paper, Algorithm 2) and one-call execution of it.
+
+``make_transfer_diagram(scenario, model, meshcat=None, view="single")``
+adds to the station's ``DiagramBuilder``::
+
+    camera (RgbdSensor) -> <camera>_object_cloud (ObjectCloudSystem: label mask,
+        DepthImageToPointCloud, crop, voxel grid)   [view="full": 4 cameras, merged]
+      -> shape_estimator (LatentShapeEstimator: x, X_WO, scale, completed cloud, confidence)
+      -> grasp_regressor (GraspRegressor: grasp motion in W)
+      -> grasp_trajectory (MotionTrajectoryGenerator: IK plan, arm/hand desired states)
+      -> plant (PD-gained actuators of the UR10 and the SVH hand)
+
+and, with Meshcat, ``transfer_visualizer`` (observed cloud, completed shape,
+control-pose triads, the hand's planned path; each a toggleable path under
+``/transfer``). Running the diagram's simulator is all a user needs: the
+estimate is made by an initialization event, the rest follows through
+Drake's caches. :func:`run_transfer` does the same stage by stage, to time
+each stage, and judges the outcome with the station's judge.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+from pydrake.geometry import Meshcat, Rgba
+from pydrake.perception import Concatenate, PointCloud
+from pydrake.common.value import AbstractValue
+from pydrake.systems.analysis import InitializeParams
+from pydrake.systems.framework import DiagramBuilder, EventStatus, LeafSystem
+
+from catgrasp_drake.category_model import CategoryModel
+from catgrasp_drake.errors import InputError
+from catgrasp_drake.station.builder import StationHandles, add_station, make_planning_model
+from catgrasp_drake.station.scenario import CameraSpec, Scenario
+from catgrasp_drake.station.trial import judge_spec, simulate_and_judge
+from catgrasp_drake.systems.grasp_regressor import GraspRegressor
+from catgrasp_drake.systems.object_cloud import points_from_cloud
+from catgrasp_drake.systems.shape_estimator import LatentShapeEstimator, ShapeEstimate
+from catgrasp_drake.systems.trajectory_generator import MotionTrajectoryGenerator, PlanParams
+
+VIEWS = ("single", "full")
+#: Cameras of the "full" view: on a ring around the object, this far (m) and this high (deg).
+FULL_VIEW_CAMERAS = 4
+FULL_VIEW_DISTANCE = 0.75
+FULL_VIEW_ELEVATION_DEG = 40.0
+
+
+def ring_cameras(scenario: Scenario, n: int = FULL_VIEW_CAMERAS, distance: float = FULL_VIEW_DISTANCE,
+                 elevation_deg: float = FULL_VIEW_ELEVATION_DEG) -> tuple[CameraSpec, ...]:
+    """``n`` cameras evenly spaced on a ring around the object's initial position, looking at it."""
+    base = scenario.cameras[0] if scenario.cameras else CameraSpec()
+    target = scenario.X_WO()[:3, 3] + np.array([0.0, 0.0, 0.08])
+    el = np.radians(elevation_deg)
+    cams = []
+    for k in range(n):
+        az = 2 * np.pi * k / n + np.pi / 4
+        eye = target + distance * np.array([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)])
+        cams.append(CameraSpec(name=f"ring{k}", look_at_eye=tuple(eye), look_at_target=tuple(target), width=base.width,
+                               height=base.height, fov_y_deg=base.fov_y_deg, depth_range=base.depth_range))
+    return tuple(cams)
+
+
+class CloudMerger(LeafSystem):
+    """Concatenates point clouds (Drake's ``Concatenate``).
+
+    Input ports:
+        cloud_0 ... cloud_{n-1}: ``PointCloud`` (xyz, metres, world frame W).
+    Output ports:
+        point_cloud_W: ``PointCloud``, all points, in W.
+    """
+
+    def __init__(self, n: int):
+        super().__init__()
+        self._ins = [self.DeclareAbstractInputPort(f"cloud_{i}", AbstractValue.Make(PointCloud())) for i in range(n)]
+        self.DeclareAbstractOutputPort("point_cloud_W", lambda: AbstractValue.Make(PointCloud()),
+                                       lambda c, o: o.set_value(Concatenate([p.Eval(c) for p in self._ins])))
+
+
+class TransferVisualizer(LeafSystem):
+    """Draws the transfer's intermediate results on Meshcat once, when the simulation starts.
+
+    Input ports:
+        object_cloud_W: ``PointCloud`` the camera's object cloud (W).
+        estimate: ``ShapeEstimate`` (completed shape in W).
+        grasp_motion_W: ``GraspMotion`` (control poses in W).
+        plan: ``GraspPlan`` (joint knots; the hand's path is computed with the planning model).
+    Meshcat paths (each toggleable in the Meshcat controls):
+        /transfer/observed (blue), /transfer/completed (green),
+        /transfer/control_poses/<name> (triads), /transfer/planned_path (orange line).
+    """
+
+    def __init__(self, meshcat: Meshcat, planning_model):
+        super().__init__()
+        from catgrasp_drake.grasping.motion import GraspMotion
+        from catgrasp_drake.systems.trajectory_generator import hold_plan
+
+        self._meshcat = meshcat
+        self._planning = planning_model
+        self._cloud = self.DeclareAbstractInputPort("object_cloud_W", AbstractValue.Make(PointCloud()))
+        self._estimate = self.DeclareAbstractInputPort("estimate", AbstractValue.Make(object()))
+        self._motion = self.DeclareAbstractInputPort("grasp_motion_W", AbstractValue.Make(
+            GraspMotion(np.tile(np.eye(4), (2, 1, 1)), postures={k: np.zeros(9) for k in
+                                                                  ("open", "preshape", "closed")}, frame="world")))
+        self._plan = self.DeclareAbstractInputPort("plan", AbstractValue.Make(
+            hold_plan(np.zeros(6), np.zeros(9), "")))
+        self.DeclareInitializationPublishEvent(self._draw)
+
+    def _draw(self, context):
+        draw_transfer(self._meshcat, points_from_cloud(self._cloud.Eval(context)), self._estimate.Eval(context),
+                      self._motion.Eval(context), self._plan.Eval(context), self._planning)
+        return EventStatus.Succeeded()
+
+
+def hand_path_W(planning_model, plan) -> np.ndarray:
+    """Positions (K, 3) of the hand base in W at the plan's arm knots (forward kinematics, planning model)."""
+    from catgrasp_drake.robot.models import ARM_JOINTS, HAND_BASE_LINK
+
+    plant = planning_model.plant
+    ctx = plant.CreateDefaultContext()
+    frame = plant.GetFrameByName(HAND_BASE_LINK, planning_model.hand)
+    joints = [plant.GetJointByName(n, planning_model.arm) for n in ARM_JOINTS]
+    out = []
+    for q in plan.q_arm:
+        for j, v in zip(joints, q):
+            j.set_angle(ctx, float(v))
+        out.append(frame.CalcPoseInWorld(ctx).translation())
+    return np.array(out)
+
+
+def draw_transfer(meshcat: Meshcat, observed_W, estimate: ShapeEstimate, motion_W, plan, planning_model) -> None:
+    """Observed cloud, completed shape, control-pose triads and planned hand path under ``/transfer``."""
+    from catgrasp_drake.viz.meshcat_tools import COLORS, draw_cloud, draw_triad
+
+    meshcat.Delete("/transfer")
+    if len(observed_W):
+        draw_cloud(meshcat, "/transfer/observed", observed_W, COLORS["observed"])
+    if estimate.ok:
+        draw_cloud(meshcat, "/transfer/completed", estimate.completed_W, COLORS["completed"])
+        for name, X in zip(motion_W.pose_names, motion_W.poses):
+            draw_triad(meshcat, f"/transfer/control_poses/{name}", X, length=0.06)
+    if plan.ok:
+        path = hand_path_W(planning_model, plan)
+        meshcat.SetLine("/transfer/planned_path", path.T, 3.0, Rgba(1.0, 0.55, 0.0, 1.0))
+
+
+@dataclass
+class TransferDiagram:
+    """A built transfer diagram and handles to its systems."""
+
+    diagram: object
+    station: StationHandles
+    estimator: LatentShapeEstimator
+    regressor: GraspRegressor
+    generator: MotionTrajectoryGenerator
+    cloud_port: object  # the output port feeding the estimator
+    view: str
+    model: CategoryModel
+    meshcat: Meshcat | None = None
+
+
+def make_transfer_diagram(scenario: Scenario, model: CategoryModel, meshcat: Meshcat | None = None, *,
+                          view: str = "single", camera: str | None = None, min_confidence: float = 0.0,
+                          params: PlanParams = PlanParams(), yaw_candidates=8, **inference_kwargs) -> TransferDiagram:
+    """The station with the transfer systems wired in (module docstring); see :class:`TransferDiagram`.
+
+    ``view`` "single": the scenario's camera ``camera`` (default its first)
+    with the visibility-aware fit; "full": ``FULL_VIEW_CAMERAS`` cameras on a
+    ring around the object, clouds merged, no visibility model.
+    ``min_confidence``: below it the motion is refused (status "refused: ...").
+    """
+    if not isinstance(model, CategoryModel):
+        raise InputError(f"model: expected a CategoryModel, got {type(model).__name__}")
+    if view not in VIEWS:
+        raise InputError(f"view: expected one of {VIEWS}, got {view!r}")
+    if scenario.object.category is not None and scenario.object.category != model.category:
+        raise InputError(f"the scenario's object is a {scenario.object.category!r}, the model is for "
+                         f"{model.category!r}")
+    if view == "full":
+        scenario = scenario.replace(cameras=ring_cameras(scenario))
+    elif not scenario.cameras:
+        raise InputError(f"scenario {scenario.name!r} has no camera; a single view needs one")
+    builder = DiagramBuilder()
+    h = add_station(builder, scenario, meshcat)
+    estimator = builder.AddNamedSystem("shape_estimator", LatentShapeEstimator(
+        model.space, scenario.table.pose.matrix(), yaw_candidates=yaw_candidates, **inference_kwargs))
+    if view == "single":
+        name = camera or scenario.cameras[0].name
+        if name not in h.cameras:
+            raise InputError(f"camera {name!r} not in scenario {scenario.name!r}; cameras: {sorted(h.cameras)}")
+        cloud_port = h.object_clouds[name].GetOutputPort("object_cloud_W")
+        builder.Connect(h.cameras[name].body_pose_in_world_output_port(), estimator.GetInputPort("camera_pose"))
+    else:
+        merger = builder.AddNamedSystem("cloud_merger", CloudMerger(len(h.cameras)))
+        for i, name in enumerate(h.cameras):
+            builder.Connect(h.object_clouds[name].GetOutputPort("object_cloud_W"), merger.get_input_port(i))
+        cloud_port = merger.get_output_port()
+    builder.Connect(cloud_port, estimator.GetInputPort("object_cloud_W"))
+    regressor = builder.AddNamedSystem("grasp_regressor", GraspRegressor(model))
+    for port in ("x", "X_WO", "scale"):
+        builder.Connect(estimator.GetOutputPort(port), regressor.GetInputPort(port))
+    planning = make_planning_model(scenario)
+    generator = builder.AddNamedSystem("grasp_trajectory", MotionTrajectoryGenerator(
+        h.plant, h.arm, h.hand, planning, params=params, min_confidence=min_confidence))
+    builder.Connect(regressor.GetOutputPort("grasp_motion_W"), generator.GetInputPort("grasp_motion_W"))
+    builder.Connect(estimator.GetOutputPort("confidence"), generator.GetInputPort("confidence"))
+    builder.Connect(generator.GetOutputPort("arm_desired_state"), h.plant.get_desired_state_input_port(h.arm))
+    builder.Connect(generator.GetOutputPort("hand_desired_state"), h.plant.get_desired_state_input_port(h.hand))
+    if meshcat is not None:
+        viz = builder.AddNamedSystem("transfer_visualizer", TransferVisualizer(meshcat, planning))
+        builder.Connect(cloud_port, viz.GetInputPort("object_cloud_W"))
+        builder.Connect(estimator.GetOutputPort("estimate"), viz.GetInputPort("estimate"))
+        builder.Connect(regressor.GetOutputPort("grasp_motion_W"), viz.GetInputPort("grasp_motion_W"))
+        builder.Connect(generator.GetOutputPort("plan"), viz.GetInputPort("plan"))
+    diagram = builder.Build()
+    diagram.set_name("grasp_transfer")
+    return TransferDiagram(diagram, h, estimator, regressor, generator, cloud_port, view, model, meshcat)
+
+
+@dataclass(frozen=True)
+class TransferResult:
+    """Outcome of one transfer: the estimate, the predicted motion, the plan and the judged execution."""
+
+    category: str
+    instance: str | None
+    view: str
+    grasp_success: bool
+    functional_success: bool
+    failure_reason: str | None
+    detail: str
+    plan_status: str
+    confidence: float
+    scale: float
+    X_WO_estimated: tuple
+    X_WO_true: tuple
+    object_rise_m: float
+    object_tilt_deg: float
+    num_observed_points: int
+    timings: dict = field(default_factory=dict)  # seconds per stage
+
+    def to_dict(self) -> dict:
+        from dataclasses import asdict
+
+        return asdict(self)
+
+
+def _tuple(X) -> tuple:
+    return tuple(tuple(round(float(v), 9) for v in row) for row in np.asarray(X))
+
+
+def run_transfer(td: TransferDiagram, *, record_html=None, return_context: bool = False):
+    """Perceive, estimate, regress, plan, execute and judge once (stage timings in ``timings``).
+
+    Equivalent to simulating ``td.diagram`` from its default context (the
+    initialization event would make the same estimate); here each stage is
+    run explicitly first so that its time can be measured, then the
+    simulation starts with initialization events suppressed. Returns the
+    :class:`TransferResult` (and the final root context with ``return_context``).
+    """
+    h = td.station
+    timings = {}
+    t_all = time.perf_counter()
+    context = td.diagram.CreateDefaultContext()
+    t0 = time.perf_counter()
+    observed = points_from_cloud(td.cloud_port.Eval(td.cloud_port.get_system().GetMyContextFromRoot(context)))
+    timings["perceive"] = time.perf_counter() - t0  # render depth + label, back-project, crop, voxel grid
+    est_ctx = td.estimator.GetMyMutableContextFromRoot(context)
+    t0 = time.perf_counter()
+    estimate = td.estimator.estimate_now(est_ctx)
+    timings["estimate"] = time.perf_counter() - t0
+    td.estimator.set_estimate(est_ctx, estimate)
+    t0 = time.perf_counter()
+    motion = td.regressor.GetOutputPort("grasp_motion_W").Eval(td.regressor.GetMyContextFromRoot(context))
+    timings["regress"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    plan = td.generator.GetOutputPort("plan").Eval(td.generator.GetMyContextFromRoot(context))
+    timings["plan"] = time.perf_counter() - t0
+    if td.meshcat is not None:
+        draw_transfer(td.meshcat, observed, estimate, motion, plan, td.generator._planning)
+    spec = judge_spec(h, motion.lift_height)
+    X_true = h.scenario.X_WO()
+    base = dict(category=td.model.category, instance=h.scenario.object.instance, view=td.view,
+                plan_status=plan.status, confidence=float(estimate.confidence), scale=float(estimate.scale),
+                X_WO_estimated=_tuple(estimate.X_WO), X_WO_true=_tuple(X_true),
+                num_observed_points=int(len(observed)))
+    if not plan.ok:
+        reason = plan.status.split(":")[0]
+        reason = {"collision": "collision_before_closing", "ik_failed": "unreachable",
+                  "branch_flip": "unreachable"}.get(reason, reason)
+        timings["total"] = time.perf_counter() - t_all
+        result = TransferResult(grasp_success=False, functional_success=False, failure_reason=reason,
+                                detail=plan.status, object_rise_m=0.0, object_tilt_deg=0.0, timings=timings, **base)
+        return (result, context) if return_context else result
+    t0 = time.perf_counter()
+    verdict, _, _, sim_time = simulate_and_judge(
+        td.diagram, context, h, plan.timeline, spec, meshcat=td.meshcat, record_html=record_html,
+        initialize_params=InitializeParams(suppress_initialization_events=True))
+    timings["execute"] = time.perf_counter() - t0
+    timings["simulated_s"] = sim_time
+    timings["total"] = time.perf_counter() - t_all
+    result = TransferResult(grasp_success=verdict.grasp_success, functional_success=verdict.functional_success,
+                            failure_reason=verdict.failure_reason, detail=verdict.detail,
+                            object_rise_m=float(verdict.object_rise_m), object_tilt_deg=float(verdict.tilt_deg),
+                            timings=timings, **base)
+    return (result, context) if return_context else result

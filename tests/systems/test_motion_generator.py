@@ -1,0 +1,55 @@
+"""MotionTrajectoryGenerator through its ports: the plan is the planner's, computed once, refused when unsure."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from catgrasp_drake.robot.models import ARM_JOINTS
+from catgrasp_drake.station.builder import make_planning_model
+from catgrasp_drake.station.handwritten import load_handwritten_motion
+from catgrasp_drake.station.scenario import load_scenario
+from catgrasp_drake.systems.trajectory_generator import MotionTrajectoryGenerator
+
+
+@pytest.fixture(scope="module")
+def setup():
+    scenario = load_scenario("drill_default")
+    planning = make_planning_model(scenario)
+    motion_W = load_handwritten_motion("drill", "drill_00").in_world(scenario.X_WO())
+    gen = MotionTrajectoryGenerator(planning.plant, planning.arm, planning.hand, planning, min_confidence=0.3)
+    return planning, motion_W, gen
+
+
+def _context(gen, motion_W, confidence):
+    ctx = gen.CreateDefaultContext()
+    gen.GetInputPort("grasp_motion_W").FixValue(ctx, motion_W)
+    gen.GetInputPort("confidence").FixValue(ctx, [confidence])
+    return ctx
+
+
+def test_plan_port_equals_the_planner_and_is_computed_once(setup):
+    planning, motion_W, gen = setup
+    ctx = _context(gen, motion_W, 0.9)
+    plan = gen.GetOutputPort("plan").Eval(ctx)
+    assert plan.ok and gen.GetOutputPort("plan_status").Eval(ctx) == "ok"
+    ref = planning.plan(motion_W)
+    assert np.allclose(plan.times, ref.times) and np.allclose(plan.q_arm, ref.q_arm, atol=1e-6)
+    # desired states follow the plan in time (actuator order = ARM_JOINTS order for the UR10 model)
+    t = 0.5 * (plan.timeline.reach + plan.timeline.close)
+    ctx.SetTime(t)
+    x_arm = gen.GetOutputPort("arm_desired_state").Eval(ctx)
+    q_ref = plan.arm_trajectory().value(t).ravel()
+    assert len(x_arm) == 2 * len(ARM_JOINTS)
+    assert np.allclose(x_arm[:6], q_ref, atol=1e-9)
+    assert gen.GetOutputPort("plan").Eval(ctx) is plan  # time changed, plan not recomputed
+
+
+def test_low_confidence_is_refused_with_a_clear_status(setup):
+    planning, motion_W, gen = setup
+    ctx = _context(gen, motion_W, 0.2)
+    plan = gen.GetOutputPort("plan").Eval(ctx)
+    assert not plan.ok and plan.failure_kind == "refused"
+    assert "low confidence (0.20 < 0.30): take another view" in plan.status
+    ctx.SetTime(2.0)  # the arm holds its start configuration
+    assert np.allclose(gen.GetOutputPort("arm_desired_state").Eval(ctx)[:6], planning.q_arm_start)
