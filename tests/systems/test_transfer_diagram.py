@@ -1,0 +1,77 @@
+"""The whole grasp transfer diagram: builds, runs without Meshcat, and grasps a held-out drill from one view."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from pydrake.systems.analysis import Simulator
+
+from catgrasp_drake.category_model import CategoryModel
+from catgrasp_drake.demo import default_model_path, pick_novel_instance
+from catgrasp_drake.station.scenario import load_scenario, random_placement, with_instance
+from catgrasp_drake.transfer import make_transfer_diagram
+
+
+@pytest.fixture(scope="module")
+def drill_model():
+    return CategoryModel.load(default_model_path("drill"), category="drill")
+
+
+def test_committed_model_holds_out_the_demo_instances(drill_model):
+    assert pick_novel_instance(drill_model, None) == "drill_12"
+    assert {"drill_11", "drill_12"}.isdisjoint(drill_model.instances)
+
+
+def test_diagram_runs_as_a_plain_simulation_without_meshcat(drill_model):
+    """Simulator.Initialize() alone makes the estimate (initialization event); the plan follows by caching."""
+    instance = pick_novel_instance(drill_model, None)
+    scenario = random_placement(with_instance(load_scenario("drill_default"), instance), 0)
+    td = make_transfer_diagram(scenario, drill_model)
+    assert td.meshcat is None
+    names = {td.diagram.GetSystems()[i].get_name() for i in range(len(td.diagram.GetSystems()))}
+    assert {"shape_estimator", "grasp_regressor", "grasp_trajectory", "camera0"} <= names
+    simulator = Simulator(td.diagram)
+    context = simulator.get_mutable_context()
+    simulator.Initialize()
+    est = td.estimator.GetOutputPort("estimate").Eval(td.estimator.GetMyContextFromRoot(context))
+    assert est.ok and est.confidence > 0.3
+    X_true = scenario.X_WO()
+    assert np.linalg.norm(est.X_WO[:3, 3] - X_true[:3, 3]) < 0.03  # the object is where it was put
+    status = td.generator.GetOutputPort("plan_status").Eval(td.generator.GetMyContextFromRoot(context))
+    assert status == "ok"
+    simulator.AdvanceTo(0.3)
+    # still the same estimate: it is state, not recomputed from the camera as the simulation steps
+    assert td.estimator.GetOutputPort("estimate").Eval(td.estimator.GetMyContextFromRoot(context)) is est
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    "known failure, measured: the transferred drill grasp lands 2-3 cm off the trigger (regressor "
+    "leave-one-instance-out error 18 mm + registration drift at the trigger) and the reach knocks the "
+    "drill over; 0/10 held-out placements succeed (README, 'Grasp transfer'). strict: passes -> remove this"))
+def test_demo_grasps_a_held_out_drill_functionally_from_one_view(tmp_path, capsys):
+    _run_demo(tmp_path, capsys)
+    record = json.loads((tmp_path / "result.json").read_text())
+    assert record["grasp_success"] and record["functional_success"], record
+
+
+def _run_demo(tmp_path, capsys) -> dict:
+    from catgrasp_drake.cli import main
+
+    assert main(["demo", "--out", str(tmp_path)]) == 0
+    printed = capsys.readouterr().out
+    for stage in ("model", "diagram", "perceive", "estimate", "regress", "plan", "execute", "judge", "write"):
+        assert f"  {stage} " in printed
+    record = json.loads((tmp_path / "result.json").read_text())
+    assert record["instance"] == "drill_12" and record["view"] == "single"
+    assert record["plan_status"] == "ok" and record["num_observed_points"] > 500
+    html = (tmp_path / "transfer.html").read_text()
+    assert "<html" in html.lower() and len(html) > 10_000
+    assert (tmp_path / "transfer.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    return record
+
+
+def test_demo_runs_every_stage_and_writes_its_outputs(tmp_path, capsys):
+    record = _run_demo(tmp_path, capsys)
+    assert 0.3 < record["confidence"] <= 1.0 and record["failure_reason"] != "simulation_error"
