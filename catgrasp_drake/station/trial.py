@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 from pydrake.geometry import Meshcat
 from pydrake.systems.analysis import Simulator
-from pydrake.systems.framework import DiagramBuilder
+from pydrake.systems.framework import DiagramBuilder, EventStatus
 
 from catgrasp_drake.core.fileio import atomic_write_text
 from catgrasp_drake.errors import InputError
@@ -262,18 +262,34 @@ def run_grasp_trial(scenario: Scenario, motion_O: GraspMotion, *, meshcat: Meshc
     return result(verdict, X_final, end, sim_time)
 
 
+#: Wall-clock limit (s) of one simulated grasp: a contact problem that stalls the solver ends as
+#: a failed trial ("simulation_timeout") instead of blocking a training or evaluation run.
+MAX_TRIAL_WALL_S = 90.0
+
+
 def simulate_and_judge(diagram, context, station: StationHandles, timeline, spec: JudgeSpec, *,
-                       meshcat: Meshcat | None = None, record_html=None, initialize_params=None):
+                       meshcat: Meshcat | None = None, record_html=None, initialize_params=None,
+                       max_wall_s: float = MAX_TRIAL_WALL_S):
     """Simulate ``diagram`` from ``context`` to ``timeline.end`` and judge the grasp.
 
     Snapshots are taken at the start, at ``timeline.close``, ``timeline.hold``
     and ``timeline.end``. A solver failure inside the plant becomes a
     ``simulation_error`` verdict, never an exception. With the station's
     Meshcat visualizer the run is recorded (and written to ``record_html``).
+    Past ``max_wall_s`` seconds of wall-clock time the run stops with a
+    ``simulation_timeout`` verdict.
     Returns ``(verdict, X_WO_final, end_snapshot or None, simulated_time_s)``.
     """
     simulator = Simulator(diagram, context)
     simulator.set_target_realtime_rate(0.0)
+    deadline = time.monotonic() + float(max_wall_s)
+
+    def monitor(_context):
+        if time.monotonic() > deadline:
+            return EventStatus.Failed(None, f"wall-clock limit of {max_wall_s:.0f} s reached")
+        return EventStatus.Succeeded()
+
+    simulator.set_monitor(monitor)
     visualizer = station.meshcat_visualizer
     if visualizer is not None:
         visualizer.DeleteRecording()
@@ -293,8 +309,9 @@ def simulate_and_judge(diagram, context, station: StationHandles, timeline, spec
     except RuntimeError as e:  # a solver failure inside the plant: report, never raise
         X = station.plant.EvalBodyPoseInWorld(station.plant.GetMyContextFromRoot(context),
                                               station.object_body).GetAsMatrix4()
-        return (Verdict(False, False, "simulation_error", str(e).splitlines()[0][:200]), X, None,
-                context.get_time())
+        message = str(e).splitlines()[0][:200] if str(e) else type(e).__name__
+        reason = "simulation_timeout" if "wall-clock limit" in str(e) else "simulation_error"
+        return Verdict(False, False, reason, message), X, None, context.get_time()
     finally:
         if visualizer is not None:
             visualizer.StopRecording()
