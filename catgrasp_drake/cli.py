@@ -84,7 +84,7 @@ def _cmd_train(args) -> int:
     from catgrasp_drake.training import TrainingConfig, train_category
 
     config = TrainingConfig(samples_per_instance=args.samples, seed=args.seed, workers=args.workers,
-                            canonical_instance=args.canonical, cache_dir=args.cache,
+                            canonical_instance=args.canonical, cache_dir=args.cache, ray=args.ray,
                             sampling=SamplingParams())
     from catgrasp_drake.data.dataset import list_instances
 
@@ -113,6 +113,28 @@ def _cmd_train(args) -> int:
     print(f"latent dimensions q = {st['q']}; time: shape space {st['shape_time_s']} s, trials "
           f"{st['trial_time_s']} s ({st['trials_per_s']} trials/s), total {st['total_time_s']} s")
     print(f"wrote {out}")
+    return 0
+
+
+def _cmd_evaluate(args) -> int:
+    from catgrasp_drake.evaluation import EvalConfig, format_table, evaluate
+
+    config = EvalConfig(category=args.category, methods=tuple(args.methods), views=tuple(args.views),
+                        seed=args.seed, folds=args.folds, instances=tuple(args.instances) if args.instances else None,
+                        samples_per_instance=args.samples, workers=args.workers, out_dir=args.out, ray=args.ray)
+    print(f"evaluating {args.category}: leave-two-out, methods {', '.join(config.methods)}, "
+          f"views {', '.join(config.views)}, seed {args.seed}")
+    report = evaluate(config, progress=_Progress())
+    print(format_table(args.category, report.table))
+    for m, t in report.inference_s.items():
+        print(f"inference time {m:<8s} median {t['median']:.2f} s, max {t['max']:.2f} s")
+    c = report.confidence
+    if c.get("auroc") is not None:
+        print(f"confidence (latent): AUROC {c['auroc']:.2f} over {c['trials']} trials; functional success "
+              f"{100 * c['success_all']:.0f} % -> {100 * c['success_kept']:.0f} % when the least confident 20 % "
+              f"are refused (threshold {c['threshold']:.2f})")
+    out = Path(args.out) / args.category
+    print(f"wrote {out / 'records.jsonl'} and {out / 'report.json'} in {report.wall_s:.0f} s")
     return 0
 
 
@@ -187,7 +209,24 @@ def build_parser() -> argparse.ArgumentParser:
     t.add_argument("--workers", type=int, default=None, help="worker processes (default: all cores)")
     t.add_argument("--cache", default="out/trial_cache", help="trial cache directory (resumes interrupted runs)")
     t.add_argument("--out", help="model file (default: models/trained/<category>.npz)")
+    t.add_argument("--ray", default=None,
+                   help="run trials on a Ray cluster: 'auto', 'local' or the head's address (extra .[cluster])")
     t.set_defaults(func=_cmd_train)
+
+    e = sub.add_parser("evaluate", help="the paper's Table I: leave-two-out, full and single views, baselines")
+    e.add_argument("category")
+    e.add_argument("--methods", nargs="+", default=["latent", "rigid", "cpd", "nearest"],
+                   choices=["latent", "rigid", "cpd", "nearest"])
+    e.add_argument("--views", nargs="+", default=["full", "single"], choices=["full", "single"])
+    e.add_argument("--seed", type=int, default=0, help="seed of every test object's placement")
+    e.add_argument("--folds", type=int, default=None, help="number of leave-two-out folds (default: the paper's)")
+    e.add_argument("--instances", nargs="+", help="only these test instances (their folds' models only)")
+    e.add_argument("--samples", type=int, default=12, help="sampled motions per instance when training fold models")
+    e.add_argument("--workers", type=int, default=None, help="worker processes (default: all cores)")
+    e.add_argument("--out", default="out/eval", help="output folder (fold models, trial cache, records, report)")
+    e.add_argument("--ray", default=None,
+                   help="run trials on a Ray cluster: 'auto', 'local' or the head's address (extra .[cluster])")
+    e.set_defaults(func=_cmd_evaluate)
 
     d = sub.add_parser("demo", help="the main job on the embedded default data")
     d.add_argument("--category", default="drill", help="drill, spray_bottle or mug")

@@ -121,11 +121,17 @@ def run_tasks(
     code_version: str,
     workers: int | None = None,
     progress: Callable[[TaskOutcome, int, int], None] | None = None,
+    ray_address: str | None = None,
 ) -> list[TaskOutcome]:
     """Run ``fn`` on every spec (cached ones are read back), returning outcomes in spec order.
 
     ``workers``: number of processes (default: all cores; 0 or 1 runs in this
     process). ``progress(outcome, done, total)`` is called after each task.
+    ``ray_address``: run the tasks on a Ray cluster instead (``"auto"``: the
+    running cluster, ``"local"``: start one on this machine, else the head's
+    address; needs the optional extra ``.[cluster]``): the same task function
+    on the same specs, results cached the same way, so a run may switch
+    between local workers and Ray and resume either way.
     Specs must be JSON-able dicts; duplicates are run once.
     """
     specs = [dict(s) for s in specs]
@@ -165,7 +171,9 @@ def run_tasks(
             progress(TaskOutcome(k, spec_of[k], results[k][0], True), done, total)
 
     n_workers = (os.cpu_count() or 1) if workers is None else int(workers)
-    if n_workers <= 1 or len(todo) <= 1:
+    if ray_address is not None and todo:
+        _run_on_ray(fn, todo, finish, ray_address, n_workers)
+    elif n_workers <= 1 or len(todo) <= 1:
         for k, s in todo.items():
             finish(k, _run_one(fn, s), False)
     else:
@@ -177,3 +185,29 @@ def run_tasks(
                     k = pending.pop(fut)
                     finish(k, fut.result(), False)
     return [TaskOutcome(k, spec_of[k], *results[k]) for k in keys]
+
+
+def _ray_module():
+    try:
+        import ray
+    except ImportError:
+        raise InputError("Ray is not installed: pip install -e '.[cluster]' (or run without --ray)") from None
+    return ray
+
+
+def _run_on_ray(fn, todo: dict, finish, address: str, n_workers: int) -> None:
+    """Submit every todo task as a Ray remote call of ``_run_one(fn, spec)``; finish them as they complete."""
+    ray = _ray_module()
+    if not ray.is_initialized():
+        if address == "local":
+            ray.init(num_cpus=max(n_workers, 1), include_dashboard=False, log_to_driver=False,
+                     _node_ip_address="127.0.0.1")
+        else:
+            ray.init(address=address, log_to_driver=False)
+    remote = ray.remote(num_cpus=1)(_run_one)
+    pending = {remote.remote(fn, s): k for k, s in todo.items()}
+    while pending:
+        ready, _ = ray.wait(list(pending), num_returns=1)
+        for ref in ready:
+            k = pending.pop(ref)
+            finish(k, ray.get(ref), False)

@@ -205,6 +205,7 @@ def make_transfer_diagram(scenario: Scenario, model: CategoryModel, meshcat: Mes
         h.plant, h.arm, h.hand, planning, params=params, min_confidence=min_confidence))
     builder.Connect(regressor.GetOutputPort("grasp_motion_W"), generator.GetInputPort("grasp_motion_W"))
     builder.Connect(estimator.GetOutputPort("confidence"), generator.GetInputPort("confidence"))
+    builder.Connect(estimator.GetOutputPort("completed_cloud_W"), generator.GetInputPort("object_cloud_W"))
     builder.Connect(generator.GetOutputPort("arm_desired_state"), h.plant.get_desired_state_input_port(h.arm))
     builder.Connect(generator.GetOutputPort("hand_desired_state"), h.plant.get_desired_state_input_port(h.hand))
     if meshcat is not None:
@@ -304,3 +305,26 @@ def run_transfer(td: TransferDiagram, *, record_html=None, return_context: bool 
                             object_rise_m=float(verdict.object_rise_m), object_tilt_deg=float(verdict.tilt_deg),
                             timings=timings, **base)
     return (result, context) if return_context else result
+
+
+def observe(scenario: Scenario, view: str = "single", camera: str | None = None):
+    """The object's cloud as the station's camera(s) see it: ``(points_W (N, 3), camera position or None)``.
+
+    ``view`` "single": the scenario's camera (its position is returned for
+    the visibility-aware fit); "full": ``FULL_VIEW_CAMERAS`` ring cameras,
+    clouds merged, no camera position. Renders once, simulates nothing.
+    """
+    from catgrasp_drake.station.builder import make_station
+
+    if view not in VIEWS:
+        raise InputError(f"view: expected one of {VIEWS}, got {view!r}")
+    if view == "full":
+        scenario = scenario.replace(cameras=ring_cameras(scenario))
+    station = make_station(scenario)
+    context = station.CreateDefaultContext()
+    names = [c.name for c in scenario.cameras] if view == "full" else [camera or scenario.cameras[0].name]
+    clouds = [points_from_cloud(station.GetOutputPort(f"{n}.object_cloud_W").Eval(context)) for n in names]
+    camera_W = None
+    if view == "single":
+        camera_W = station.GetOutputPort(f"{names[0]}.X_WC").Eval(context).translation()
+    return np.vstack(clouds) if clouds else np.zeros((0, 3)), camera_W

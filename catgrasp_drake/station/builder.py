@@ -340,13 +340,19 @@ def make_station(scenario: Scenario, meshcat: Meshcat | None = None) -> Diagram:
     return diagram
 
 
-def make_planning_model(scenario: Scenario):
-    """The robot's planning model of ``scenario``: table + arm + hand, no object, no cameras.
+def make_planning_model(scenario: Scenario, obstacle_W=None):
+    """The robot's planning model of ``scenario``: table + arm + hand, no cameras, and the object as perceived.
 
-    Returns a ``PlanningModel`` (``catgrasp_drake.systems.trajectory_generator``)
-    whose ``plan(motion_W)`` runs the IK planner; the arm starts at
-    ``scenario.arm_q_home``, the hand open.
+    ``obstacle_W`` (N, 3) world points of the object as the robot knows it
+    (e.g. the estimator's completed shape) become one welded body
+    ``perceived_object`` with their convex hull as collision geometry; the
+    planner keeps the arm clear of it on the way to the pregrasp (the reach
+    itself is allowed to touch it). None: no object in the model. Returns a
+    ``PlanningModel`` (``catgrasp_drake.systems.trajectory_generator``); the
+    arm starts at ``scenario.arm_q_home``, the hand open.
     """
+    from pydrake.geometry import Convex
+
     from catgrasp_drake.robot.models import add_arm_and_hand, load_hand_postures, make_parser
     from catgrasp_drake.systems.trajectory_generator import PlanningModel
 
@@ -355,9 +361,19 @@ def make_planning_model(scenario: Scenario):
     parser = make_parser(plant)
     table = _add_table(plant, scenario)
     arm_hand = add_arm_and_hand(plant, parser, X_W_ArmBase=RigidTransform(scenario.arm_base.matrix()))
+    obstacle = None
+    if obstacle_W is not None and len(obstacle_W) >= 4:
+        obstacle = plant.AddModelInstance("perceived_object")
+        body = plant.AddRigidBody("body", obstacle, SpatialInertia(1.0, np.zeros(3), UnitInertia.SolidSphere(0.05)))
+        plant.WeldFrames(plant.world_frame(), body.body_frame(), RigidTransform())
+        props = ProximityProperties()
+        AddContactMaterial(dissipation=5.0, point_stiffness=1e5, friction=CoulombFriction(0.5, 0.5),
+                           properties=props)
+        plant.RegisterCollisionGeometry(body, RigidTransform(), Convex(np.asarray(obstacle_W, float).T, "hull"),
+                                        "hull", props)
     plant.Finalize()
     set_hand_default_posture(plant, arm_hand.hand, load_hand_postures(posture_category(scenario))["open"])
     diagram = builder.Build()
     diagram.set_name("planning_model")
     return PlanningModel(diagram, plant, scene_graph, arm_hand.arm, arm_hand.hand, table,
-                         np.asarray(scenario.arm_q_home, float))
+                         np.asarray(scenario.arm_q_home, float), scenario, obstacle)

@@ -507,11 +507,12 @@ class _PlanCache:
 # ----------------------------------------------------------------------------- transfer: plan from an input motion
 @dataclass
 class PlanningModel:
-    """The robot's own model of the world for planning: arm, hand and table (no object).
+    """The robot's own model of the world for planning: arm, hand, table and the object as perceived.
 
     Built by ``catgrasp_drake.station.builder.make_planning_model``; the
-    robot knows the table but only sees the object through its cloud, so the
-    plan checks robot vs table, and the reach brings the hand to the object.
+    robot knows the table and sees the object only through its cloud, so the
+    object is the convex hull of the completed shape (``with_obstacle``), or
+    absent. The way to the pregrasp keeps clear of it; the reach may touch it.
     """
 
     diagram: object
@@ -521,13 +522,21 @@ class PlanningModel:
     hand: ModelInstanceIndex
     table: ModelInstanceIndex
     q_arm_start: np.ndarray
+    scenario: object = None
+    obstacle: ModelInstanceIndex | None = None
+
+    def with_obstacle(self, points_W) -> "PlanningModel":
+        """A planning model of the same scenario with ``points_W`` (N, 3) as the perceived object."""
+        from catgrasp_drake.station.builder import make_planning_model
+
+        return make_planning_model(self.scenario, points_W)
 
     def plan(self, motion_W: GraspMotion, params: PlanParams = PlanParams()) -> GraspPlan:
         """:func:`plan_grasp` of ``motion_W`` on a fresh scratch context."""
         ctx = self.diagram.CreateDefaultContext()
         return plan_grasp(self.plant, self.plant.GetMyMutableContextFromRoot(ctx), self.scene_graph,
                           self.scene_graph.GetMyMutableContextFromRoot(ctx), arm=self.arm, hand=self.hand,
-                          object_instance=None, table=self.table, motion_W=motion_W,
+                          object_instance=self.obstacle, table=self.table, motion_W=motion_W,
                           q_arm_start=self.q_arm_start, params=params)
 
 
@@ -550,6 +559,9 @@ class MotionTrajectoryGenerator(LeafSystem):
             unconnected = 1). Below ``min_confidence`` (or 0: no estimate) the
             motion is refused: the plan holds the start configuration with the
             hand open and its status says "refused: ... take another view".
+        object_cloud_W: ``PointCloud`` of the object as perceived (e.g. the
+            completed shape), metres, W (optional): its convex hull joins the
+            planning model, so the arm's way to the pregrasp avoids it.
     Output ports:
         plan: ``GraspPlan`` (joint knots, timeline, status).
         arm_desired_state: [q; v] (2 * 6) of the arm, actuator order, rad and rad/s.
@@ -578,6 +590,9 @@ class MotionTrajectoryGenerator(LeafSystem):
             GraspMotion(np.tile(np.eye(4), (2, 1, 1)), postures={k: np.zeros(9) for k in
                                                                   ("open", "preshape", "closed")}, frame="world")))
         self._conf_in = self.DeclareVectorInputPort("confidence", 1)
+        from pydrake.perception import PointCloud
+
+        self._obstacle_in = self.DeclareAbstractInputPort("object_cloud_W", AbstractValue.Make(PointCloud()))
         q_open = np.zeros(9)
         self._idle = _PlanCache(hold_plan(planning_model.q_arm_start, q_open, "no motion"))
         self._cache = self.DeclareCacheEntry(
@@ -603,7 +618,13 @@ class MotionTrajectoryGenerator(LeafSystem):
         if refusal is not None:
             plan = hold_plan(self._planning.q_arm_start, motion.posture("open"), refusal)
         else:
-            plan = self._planning.plan(motion, self._params)
+            planning = self._planning
+            if self._obstacle_in.HasValue(context):
+                pts = np.asarray(self._obstacle_in.Eval(context).xyzs(), float).T
+                pts = pts[np.all(np.isfinite(pts), axis=1)]
+                if len(pts) >= 4:
+                    planning = planning.with_obstacle(pts)
+            plan = planning.plan(motion, self._params)
         value.set_value(_PlanCache(plan))
 
     def _calc_arm(self, context, output: BasicVector):

@@ -1,0 +1,271 @@
+"""The paper's evaluation protocol (section IV, DESIGN.md section 7): Table I with baselines.
+
+Leave-two-out cross-validation: the canonical instance always trains; the
+other instances are taken in pairs, each pair tested on a model trained on
+all the rest (drill 13 -> 6 models / 12 test instances, spray bottle 17 -> 7 /
+14, mug 15 -> 7 / 14). Every test instance is grasped from a fully observed
+cloud (four cameras around it) and from a single depth view, at a seeded
+random placement, by every method of :mod:`catgrasp_drake.baselines` -- the
+same placement, view and seed for each method.
+
+A trial is one task of :func:`catgrasp_drake.runner.run_tasks` (parallel
+workers, on-disk cache keyed by spec and code version, so an interrupted run
+resumes without redoing finished trials): observe -> predict -> execute
+(:func:`catgrasp_drake.station.trial.run_grasp_trial`, the predicted world
+motion expressed in the true object frame) -> judge. Fold models are trained
+with :func:`catgrasp_drake.training.train_category` and kept under the output
+folder (re-used when present).
+
+Outputs (``evaluate``): per-trial records (JSON lines), Table I per method next
+to the paper's figures, inference times, and the confidence analysis (AUROC of
+the estimator's confidence against functional success; success rate when the
+least confident 20 % are refused).
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from dataclasses import asdict, dataclass, field, replace
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from catgrasp_drake.baselines import METHODS
+from catgrasp_drake.errors import InputError
+
+VIEWS = ("full", "single")
+#: Number of leave-two-out folds per category (DESIGN.md section 7).
+FOLDS = {"drill": 6, "spray_bottle": 7, "mug": 7}
+#: The paper's Table I (successes, trials) per category: grasp / functional x full / partial view.
+PAPER_TABLE = {
+    "drill": {"grasp": {"full": (7, 12), "single": (6, 12)}, "functional": {"full": (4, 12), "single": (3, 12)}},
+    "spray_bottle": {"grasp": {"full": (8, 14), "single": (9, 14)},
+                     "functional": {"full": (3, 14), "single": (6, 14)}},
+}
+
+
+@dataclass(frozen=True)
+class EvalConfig:
+    """What to evaluate (SI units). ``instances``: restrict the test instances (e.g. a quick run)."""
+
+    category: str
+    methods: tuple[str, ...] = METHODS
+    views: tuple[str, ...] = VIEWS
+    seed: int = 0
+    folds: int | None = None  # None: FOLDS[category]
+    instances: tuple[str, ...] | None = None
+    samples_per_instance: int = 12  # training budget of each fold model
+    workers: int | None = None
+    out_dir: str = "out/eval"
+    ray: str | None = None  # Ray address ("auto", "local", "host:port") or None: local worker processes
+
+    def __post_init__(self):
+        bad = [m for m in self.methods if m not in METHODS]
+        if bad:
+            raise InputError(f"unknown methods {bad}; known: {', '.join(METHODS)}")
+        bad = [v for v in self.views if v not in VIEWS]
+        if bad:
+            raise InputError(f"unknown views {bad}; known: {', '.join(VIEWS)}")
+
+
+def leave_two_out(category: str, folds: int | None = None) -> list[tuple[list[str], list[str]]]:
+    """``[(train instances, test instances), ...]``: the canonical (first) instance always trains."""
+    from catgrasp_drake.data.dataset import list_instances
+
+    names = list_instances(category)
+    n = FOLDS.get(category, (len(names) - 1) // 2) if folds is None else int(folds)
+    if not 1 <= n <= (len(names) - 1) // 2:
+        raise InputError(f"folds: expected 1..{(len(names) - 1) // 2} for {len(names)} {category} instances, got {n}")
+    others = names[1:1 + 2 * n]
+    out = []
+    for k in range(n):
+        test = others[2 * k: 2 * k + 2]
+        out.append(([m for m in names if m not in test], test))
+    return out
+
+
+def eval_trial_task(spec: dict) -> dict:
+    """Worker task: one test instance, view, method and seed on one fold model -> a JSON-able record."""
+    from catgrasp_drake.baselines import predict_grasp
+    from catgrasp_drake.category_model import CategoryModel
+    from catgrasp_drake.station.scenario import load_scenario, random_placement, with_instance
+    from catgrasp_drake.station.trial import run_grasp_trial
+    from catgrasp_drake.transfer import observe
+
+    model = CategoryModel.load(spec["model"], category=spec["category"])
+    scenario = random_placement(with_instance(load_scenario(f"{spec['category']}_default"), spec["instance"]),
+                                spec["seed"])
+    t0 = time.perf_counter()
+    observed_W, camera_W = observe(scenario, spec["view"])
+    t_observe = time.perf_counter() - t0
+    pred = predict_grasp(spec["method"], model, observed_W, scenario.table.pose.matrix(), camera_W=camera_W)
+    record = {k: spec[k] for k in ("category", "fold", "instance", "view", "method", "seed")}
+    record |= {"num_points": int(len(observed_W)), "confidence": float(pred.estimate.confidence),
+               "inference_s": float(pred.timing["total"]), "observe_s": t_observe, "detail_method": pred.detail}
+    if not pred.ok:
+        return record | {"grasp": False, "functional": False, "reason": "no_estimate", "detail": pred.detail}
+    result = run_grasp_trial(scenario, pred.motion_W.in_object(scenario.X_WO()))
+    return record | {"grasp": result.grasp_success, "functional": result.functional_success,
+                     "reason": result.failure_reason, "detail": result.detail, "plan_status": result.plan_status,
+                     "sim_s": result.sim_time_s, "trial_wall_s": result.wall_time_s}
+
+
+def eval_code_version() -> str:
+    from catgrasp_drake.runner import code_fingerprint
+    from catgrasp_drake.training import TRIAL_CODE_PATHS
+
+    root = Path(__file__).resolve().parent
+    return code_fingerprint(list(TRIAL_CODE_PATHS) + [root / "baselines.py", root / "core", root / "transfer.py",
+                                                       root / "category_model.py", root / "evaluation.py"])
+
+
+def fold_model(config: EvalConfig, fold: int, train: list[str], progress=None) -> Path:
+    """The fold's model file under ``out_dir`` (trained unless already there)."""
+    from catgrasp_drake.training import TrainingConfig, train_category
+
+    path = Path(config.out_dir) / config.category / f"fold{fold}.npz"
+    if path.is_file():
+        return path
+    tc = TrainingConfig(samples_per_instance=config.samples_per_instance, seed=config.seed,
+                        workers=config.workers, canonical_instance=train[0], ray=config.ray)
+    train_category(config.category, train, tc, progress=progress).save(path)
+    return path
+
+
+def trial_specs(config: EvalConfig, models: dict[int, str], folds) -> list[dict]:
+    specs = []
+    for k, (_, test) in enumerate(folds):
+        for instance in test:
+            if config.instances is not None and instance not in config.instances:
+                continue
+            for view in config.views:
+                for method in config.methods:
+                    specs.append({"task": "eval_trial", "category": config.category, "fold": k,
+                                  "model": models[k], "instance": instance, "view": view, "method": method,
+                                  "seed": config.seed})
+    return specs
+
+
+# ----------------------------------------------------------------------------- tables
+def table_one(records: list[dict]) -> dict:
+    """``{method: {"grasp"|"functional": {view: [successes, trials]}}, ...}`` from trial records."""
+    out: dict = {}
+    for r in records:
+        cell = out.setdefault(r["method"], {"grasp": {}, "functional": {}})
+        for kind in ("grasp", "functional"):
+            s, n = cell[kind].get(r["view"], [0, 0])
+            cell[kind][r["view"]] = [s + bool(r[kind]), n + 1]
+    return out
+
+
+def auroc(scores, labels) -> float | None:
+    """Area under the ROC curve of ``scores`` for binary ``labels`` (Mann-Whitney U; ties count half)."""
+    s = np.asarray(scores, float)
+    y = np.asarray(labels, bool)
+    pos, neg = s[y], s[~y]
+    if len(pos) == 0 or len(neg) == 0:
+        return None
+    greater = (pos[:, None] > neg[None, :]).sum() + 0.5 * (pos[:, None] == neg[None, :]).sum()
+    return float(greater / (len(pos) * len(neg)))
+
+
+def confidence_analysis(records: list[dict], refuse_fraction: float = 0.2) -> dict:
+    """AUROC of confidence vs functional success, and the success rate after refusing the least confident."""
+    rs = [r for r in records if np.isfinite(r.get("confidence", np.nan))]
+    if not rs:
+        return {"trials": 0}
+    conf = np.array([r["confidence"] for r in rs])
+    ok = np.array([bool(r["functional"]) for r in rs])
+    threshold = float(np.quantile(conf, refuse_fraction))
+    kept = conf > threshold if refuse_fraction > 0 else np.ones(len(rs), bool)
+    return {"trials": len(rs), "auroc": auroc(conf, ok), "success_all": float(ok.mean()),
+            "threshold": threshold, "kept": int(kept.sum()),
+            "success_kept": float(ok[kept].mean()) if kept.any() else None}
+
+
+def format_table(category: str, table: dict) -> str:
+    """Markdown Table I: methods x (grasp, functional) x (full, single), with the paper's row."""
+    lines = [f"| {category} | grasp, full | grasp, single view | functional, full | functional, single view |",
+             "|---|---|---|---|---|"]
+
+    def cell(c, kind, view):
+        s, n = c.get(kind, {}).get(view, (0, 0))
+        return f"{s}/{n} ({100 * s / n:.0f} %)" if n else "—"
+
+    if category in PAPER_TABLE:
+        lines.append("| paper (RA-L 2018) | " + " | ".join(
+            cell(PAPER_TABLE[category], k, v) for k in ("grasp", "functional") for v in ("full", "single")) + " |")
+    for method, c in table.items():
+        lines.append(f"| {method} | " + " | ".join(cell(c, k, v) for k in ("grasp", "functional")
+                                                 for v in ("full", "single")) + " |")
+    return "\n".join(lines)
+
+
+@dataclass
+class EvalReport:
+    config: EvalConfig
+    records: list[dict]
+    table: dict
+    confidence: dict
+    inference_s: dict = field(default_factory=dict)  # method -> {"median", "max"}
+    wall_s: float = 0.0
+
+
+def evaluate(config: EvalConfig, *, progress: Callable[[str, int, int], None] | None = None) -> EvalReport:
+    """Run the protocol (module docstring); writes ``<out_dir>/<category>/records.jsonl`` and ``report.json``."""
+    from catgrasp_drake.core.fileio import atomic_write_text
+    from catgrasp_drake.runner import run_tasks
+
+    t0 = time.perf_counter()
+    folds = leave_two_out(config.category, config.folds)
+    wanted = set(config.instances) if config.instances is not None else None
+    models = {}
+    for k, (train, test) in enumerate(folds):
+        if wanted is not None and not wanted & set(test):
+            continue
+        models[k] = str(fold_model(config, k, train, progress=progress))
+    specs = trial_specs(config, models, folds)
+    if not specs:
+        raise InputError(f"no evaluation trials: instances {config.instances} are not test instances of any fold")
+    out = Path(config.out_dir) / config.category
+    outcomes = run_tasks(eval_trial_task, specs, cache_dir=out / "trial_cache", code_version=eval_code_version(),
+                         workers=config.workers, ray_address=config.ray,
+                         progress=(lambda o, d, t: progress("trials", d, t)) if progress else None)
+    records = []
+    for spec, o in zip(specs, outcomes):
+        r = o.result
+        if r.get("status") == "error":
+            r = {k: spec[k] for k in ("category", "fold", "instance", "view", "method", "seed")} | {
+                "grasp": False, "functional": False, "reason": "error", "detail": str(r.get("error", ""))[:300],
+                "confidence": float("nan"), "inference_s": float("nan")}
+        records.append(r)
+    times = {}
+    for m in config.methods:
+        ts = [r["inference_s"] for r in records if r["method"] == m and np.isfinite(r.get("inference_s", np.nan))]
+        if ts:
+            times[m] = {"median": float(np.median(ts)), "max": float(np.max(ts))}
+    report = EvalReport(config, records, table_one(records),
+                        confidence_analysis([r for r in records if r["method"] == "latent"]), times,
+                        time.perf_counter() - t0)
+    atomic_write_text(out / "records.jsonl", "".join(json.dumps(r, sort_keys=True) + "\n" for r in records))
+    atomic_write_text(out / "report.json", json.dumps({
+        "config": asdict(config), "table": report.table, "confidence_latent": report.confidence,
+        "inference_s": times, "wall_s": report.wall_s, "paper": PAPER_TABLE.get(config.category)},
+        indent=1, default=str) + "\n")
+    return report
+
+
+def load_records(path: str | Path) -> list[dict]:
+    """Read a ``records.jsonl`` back (one JSON object per line)."""
+    from catgrasp_drake.errors import ModelFileError
+
+    try:
+        return [json.loads(line) for line in Path(path).read_text().splitlines() if line.strip()]
+    except (OSError, ValueError) as e:
+        raise ModelFileError(f"{path}: unreadable evaluation records ({e})") from None
+
+
+def with_out_dir(config: EvalConfig, out_dir: str) -> EvalConfig:
+    return replace(config, out_dir=str(out_dir))
