@@ -71,8 +71,15 @@ def run_demo(args) -> int:
     from catgrasp_drake.transfer import make_transfer_diagram, run_transfer
     from catgrasp_drake.viz.meshcat_tools import start_meshcat
 
+    from catgrasp_drake.data.dataset import CATEGORIES
+    from catgrasp_drake.errors import InputError
+
     t_start = time.perf_counter()
     out = Path(args.out)
+    if args.model is None and args.category not in CATEGORIES:
+        raise InputError(f"unknown category {args.category!r}; known: {', '.join(CATEGORIES)}")
+    if not 0.0 <= args.min_confidence <= 1.0:
+        raise InputError(f"--min-confidence: expected a value in [0, 1], got {args.min_confidence}")
     path = Path(args.model) if args.model else default_model_path(args.category)
     if not path.is_file():
         raise ModelFileError(f"{path}: no trained {args.category} model; run 'catgrasp train {args.category}' "
@@ -107,7 +114,8 @@ def run_demo(args) -> int:
     _stage("plan", t["plan"], f"IK plan: {result.plan_status}")
     if "execute" in t:
         _stage("execute", t["execute"], f"{t['simulated_s']:.2f} s simulated (approach, reach, close, lift, hold)")
-    verdict = ("FUNCTIONAL GRASP (held, index finger on the trigger)" if result.functional_success and
+    verdict = (result.plan_status if result.failure_reason == "refused" else
+               "FUNCTIONAL GRASP (held, index finger on the trigger)" if result.functional_success and
                model.category != "mug" else "FUNCTIONAL GRASP" if result.functional_success else
                f"grasped, not functional: {result.failure_reason} ({result.detail})" if result.grasp_success else
                f"failed: {result.failure_reason} ({result.detail})")
