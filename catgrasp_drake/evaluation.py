@@ -17,7 +17,7 @@ with :func:`catgrasp_drake.training.train_category` and kept under the output
 folder (re-used when present).
 
 Outputs (``evaluate``): per-trial records (JSON lines), Table I per method next
-to the paper's figures, inference times, and the confidence analysis (AUROC of
+to the paper's figures (also as a PNG chart), inference times, and the confidence analysis (AUROC of
 the estimator's confidence against functional success; success rate when the
 least confident 20 % are refused).
 """
@@ -250,11 +250,20 @@ def evaluate(config: EvalConfig, *, progress: Callable[[str, int, int], None] | 
                         confidence_analysis([r for r in records if r["method"] == "latent"]), times,
                         time.perf_counter() - t0)
     atomic_write_text(out / "records.jsonl", "".join(json.dumps(r, sort_keys=True) + "\n" for r in records))
+    write_chart(config.category, report.table, out / "table.png")
     atomic_write_text(out / "report.json", json.dumps({
         "config": asdict(config), "table": report.table, "confidence_latent": report.confidence,
         "inference_s": times, "wall_s": report.wall_s, "paper": PAPER_TABLE.get(config.category)},
         indent=1, default=str) + "\n")
     return report
+
+
+def write_chart(category: str, table: dict, path) -> None:
+    """PNG bar chart of Table I, the paper's figures first (where the paper has them)."""
+    from catgrasp_drake.viz.charts import table_chart
+
+    rows = ({"paper": PAPER_TABLE[category]} if category in PAPER_TABLE else {}) | table
+    table_chart(category, rows, path)
 
 
 def load_records(path: str | Path) -> list[dict]:

@@ -187,7 +187,10 @@ def _add_object(plant: MultibodyPlant, parser, scenario: Scenario) -> ModelInsta
         return _add_primitive_object(plant, scenario)
     from catgrasp_drake.data.dataset import instance_sdf_url
 
-    (instance,) = parser.AddModels(url=instance_sdf_url(o.category, o.instance))
+    if o.model_dir is not None:
+        (instance,) = parser.AddModels(o.sdf_file())
+    else:
+        (instance,) = parser.AddModels(url=instance_sdf_url(o.category, o.instance))
     return instance
 
 

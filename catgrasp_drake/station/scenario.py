@@ -101,6 +101,23 @@ class ObjectSpec:
     primitive: PrimitiveObject | None = None
     xyz: tuple[float, float, float] = (0.0, 0.0, 0.0)  # in the table-top frame T
     yaw_deg: float = 0.0  # about T's z
+    #: A folder holding ``<instance>.sdf`` and ``annotations.json`` (e.g. a prepared YCB object,
+    #: ``out/ycb/drill/ycb_035``) instead of the embedded data set.
+    model_dir: str | None = None
+
+    def sdf_file(self) -> str | None:
+        """The SDF file of an object given by ``model_dir`` (None for data-set instances and primitives)."""
+        return None if self.model_dir is None else str(Path(self.model_dir) / f"{self.instance}.sdf")
+
+    def annotations(self) -> dict:
+        """The object's annotations (functional regions in its canonical frame); {} for primitives."""
+        from catgrasp_drake.data.dataset import load_annotations, read_annotations
+
+        if self.model_dir is not None:
+            return read_annotations(Path(self.model_dir) / "annotations.json")
+        if self.category is None:
+            return {}
+        return load_annotations(self.category, self.instance)
 
     @property
     def model_name(self) -> str:
@@ -265,7 +282,7 @@ def _primitive(value, where: str) -> PrimitiveObject:
 
 
 def _object(value, where: str) -> ObjectSpec:
-    d = _mapping(value, where, {"category", "instance", "primitive", "xyz", "yaw_deg"})
+    d = _mapping(value, where, {"category", "instance", "primitive", "xyz", "yaw_deg", "model_dir"})
     xyz = _vec(d.get("xyz", (0.0, 0.0, 0.0)), 3, f"{where}.xyz")
     yaw = _num(d.get("yaw_deg", 0.0), f"{where}.yaw_deg")
     if "primitive" in d:
@@ -278,6 +295,11 @@ def _object(value, where: str) -> ObjectSpec:
 
     if category not in CATEGORIES:
         raise InputError(f"{where}.category: unknown category {category!r}; known: {', '.join(CATEGORIES)}")
+    if "model_dir" in d:
+        model_dir = str(d["model_dir"])
+        if not (Path(model_dir) / f"{instance}.sdf").is_file():
+            raise InputError(f"{where}.model_dir: no {instance}.sdf in {model_dir}")
+        return ObjectSpec(category, instance, None, xyz, yaw, model_dir)
     if instance not in list_instances(category):
         raise InputError(f"{where}.instance: unknown instance {instance!r} of {category!r}")
     return ObjectSpec(category, instance, None, xyz, yaw)
@@ -428,10 +450,12 @@ def load_scenario(name: str, path: str | Path = DEFAULT_SCENARIO_FILE) -> Scenar
     return scenario_from_dict(name, data[name])
 
 
-def with_instance(scenario: Scenario, instance: str, category: str | None = None) -> Scenario:
-    """``scenario`` with its object replaced by a data-set instance (same placement)."""
+def with_instance(scenario: Scenario, instance: str, category: str | None = None,
+                  model_dir: str | None = None) -> Scenario:
+    """``scenario`` with its object replaced by a data-set instance (or the one in ``model_dir``), same placement."""
     obj = dataclasses.replace(scenario.object, instance=instance, primitive=None,
-                              category=category or scenario.object.category)
+                              category=category or scenario.object.category,
+                              model_dir=None if model_dir is None else str(model_dir))
     return scenario.replace(name=f"{scenario.name}:{instance}", object=obj)
 
 

@@ -172,11 +172,7 @@ def judge_spec(station: StationHandles, lift_height: float) -> JudgeSpec:
 
     plant = station.plant
     scenario = station.scenario
-    regions = {}
-    if scenario.object.category is not None:
-        from catgrasp_drake.data.dataset import load_annotations
-
-        regions = load_annotations(scenario.object.category, scenario.object.instance).get("regions", {})
+    regions = scenario.object.annotations().get("regions", {})
     return JudgeSpec(
         object_model=plant.GetModelInstanceName(station.object_instance),
         hand_model=station.hand_name,
