@@ -36,7 +36,10 @@ Rules (first failing rule names ``failure_reason``):
      (else ``tilted``) and some hand contact point inside the ``handle``
      box grown by the margin (else ``handle_missed``);
    - other categories (e.g. a primitive test object): functional success =
-     grasp success.
+     grasp success;
+   - an object of a functional category without its region annotated (a
+     scanned bottle without a trigger): ``no_functional_region`` (grasped,
+     functional success undefined, counted as not functional).
 """
 
 from __future__ import annotations
@@ -214,6 +217,9 @@ def judge(spec: JudgeSpec, initial: Snapshot, before_close: Snapshot, after_lift
         return verdict(False, False, "slipped", f"rise {rise_end * 100:.1f} cm at the end of the hold")
 
     # 3. functional success
+    needed = {"drill": "trigger", "spray_bottle": "trigger", "mug": "handle"}.get(spec.category)
+    if needed is not None and needed not in spec.regions:  # e.g. a scanned bottle without a trigger
+        return verdict(True, False, "no_functional_region", f"object has no {needed!r} region annotated")
     if spec.category in ("drill", "spray_bottle"):
         if not region_touched(end.contacts, spec, end.X_WO, "trigger", by=spec.index_distal_body):
             return verdict(True, False, "trigger_missed", "index distal link not on the trigger")

@@ -146,3 +146,8 @@ def test_region_and_tilt_helpers():
     assert points_in_region([p], X, TRIGGER, 0.0).tolist() == [True]
     assert points_in_region([p + [0.5, 0, 0]], X, TRIGGER, 0.0).tolist() == [False]
     assert tilt_deg(_X(), _X(roll=np.radians(20))) == pytest.approx(20.0)
+
+
+def test_missing_functional_region_is_an_outcome_not_an_exception():
+    v = judge(_spec(regions={}), *_snaps())
+    assert v.grasp_success and not v.functional_success and v.failure_reason == "no_functional_region"
