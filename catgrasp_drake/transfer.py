@@ -278,7 +278,7 @@ def run_transfer(td: TransferDiagram, *, record_html=None, return_context: bool 
     plan = td.generator.GetOutputPort("plan").Eval(td.generator.GetMyContextFromRoot(context))
     timings["plan"] = time.perf_counter() - t0
     if td.meshcat is not None:
-        draw_transfer(td.meshcat, observed, estimate, motion, plan, td.generator._planning)
+        draw_transfer(td.meshcat, observed, estimate, motion, plan, td.generator.planning_model)
     spec = judge_spec(h, motion.lift_height)
     X_true = h.scenario.X_WO()
     base = dict(category=td.model.category, instance=h.scenario.object.instance, view=td.view,

@@ -608,6 +608,11 @@ class MotionTrajectoryGenerator(LeafSystem):
                                        lambda c, o: o.set_value(self._plan_cache(c).plan.status),
                                        prerequisites_of_calc={self._cache.ticket()})
 
+    @property
+    def planning_model(self) -> PlanningModel:
+        """The robot's planning model (without the perceived object; that is added per plan)."""
+        return self._planning
+
     def _plan_cache(self, context) -> _PlanCache:
         return self._cache.Eval(context)
 
