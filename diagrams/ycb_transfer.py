@@ -40,7 +40,7 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
 
     rows = []
-    print(f"| object | category | view | grasp | functional | reason | confidence | scale |")
+    print("| object | category | view | grasp | functional | reason | confidence | scale |")
     print("|---|---|---|---|---|---|---|---|")
     for name in args.objects:
         category = ycb_object(name).category

@@ -27,9 +27,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from pydrake.common.value import AbstractValue
-from pydrake.math import RigidTransform, RotationMatrix
+from pydrake.math import RigidTransform
 from pydrake.perception import PointCloud
-from pydrake.systems.framework import BasicVector, EventStatus, LeafSystem
+from pydrake.systems.framework import EventStatus, LeafSystem
 
 from catgrasp_drake.core.inference import InferenceResult, infer_latent_pose
 from catgrasp_drake.core.shape_space import ShapeSpace
