@@ -7,11 +7,11 @@ similarity transform of the fit (rotation R, translation t, scale s) into the
 observation frame. Both act on the grasp's functional point ``grasp_anchor_H``
 (the canonical trigger or handle centre, fixed in the hand frame), the hand
 staying rigid about it, turned by the field's rotation averaged over
-``grasp_rotation_radius`` (the Jacobian at one point of a thin trigger can
-turn the hand by 30 degrees; measured 14-34 deg vs 2-5 with 5 cm): the hand
-base frame sits ~15 cm from the object, where the kernel field has died out
-and a scale error would be multiplied by the lever arm (measured on a drill
-seen from one view, scale 0.85: 30 mm grasp error at the base origin).
+``grasp_rotation_radius`` (on the drills the Jacobian at the trigger turns the
+hand by 6.9 deg on average, up to 15.3; averaged over 5 cm, 3.1 and 7.6:
+``benchmarks/bench_grasp_warp.py``). The hand base frame sits ~15 cm from the
+object, where the kernel field has died out, and a scale error would be
+multiplied by that lever arm.
 
 File format (one ``.npz``, atomic, checksummed, no pickle): the shape space's
 arrays under ``shape/``, the regressor under ``regressor/``, and a JSON header

@@ -54,11 +54,12 @@ def _snapshot_png(td, context, path: Path) -> None:
 
     from catgrasp_drake.core.fileio import atomic_write_bytes
 
-    name, sensor = next(iter(td.station.cameras.items()))
+    from catgrasp_drake.viz.render import rgb_array
+
+    sensor = next(iter(td.station.cameras.values()))
     image = sensor.color_image_output_port().Eval(sensor.GetMyContextFromRoot(context))
-    rgba = np.asarray(image.data, dtype=np.uint8).reshape(image.height(), image.width(), 4)
     buf = io.BytesIO()
-    Image.fromarray(rgba[:, :, :3]).save(buf, format="PNG")
+    Image.fromarray(rgb_array(image)).save(buf, format="PNG")
     atomic_write_bytes(path, buf.getvalue())
 
 

@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import json
 import time
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Callable
 
@@ -274,7 +274,3 @@ def load_records(path: str | Path) -> list[dict]:
         return [json.loads(line) for line in Path(path).read_text().splitlines() if line.strip()]
     except (OSError, ValueError) as e:
         raise ModelFileError(f"{path}: unreadable evaluation records ({e})") from None
-
-
-def with_out_dir(config: EvalConfig, out_dir: str) -> EvalConfig:
-    return replace(config, out_dir=str(out_dir))

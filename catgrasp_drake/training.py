@@ -70,11 +70,13 @@ class TrainingConfig:
     # CPD kernel width (m). 0.10, not the core's 0.02: a smooth field keeps correspondences coherent
     # where grasps need them -- the canonical trigger/handle warped onto each training instance lands
     # 3.8 / 4.3 / 4.0 mm from the annotated one (drill / spray bottle / mug) vs 19.0 / 18.4 / 5.9 mm at
-    # 0.02, for a registration Chamfer of 2.8 vs 2.1 mm (drills; out/ scripts, see README "Training").
+    # 0.02, for a registration Chamfer of 2.8 vs 2.1 mm (drills; benchmarks/bench_grasp_warp.py).
     beta: float | None = 0.10
     lam: float | None = None
     variance: float = 0.95
-    ridge_alpha: float = 1.0  # leave-one-instance-out on the drills: 17.7 mm (1.0) vs 30.9 mm (0.01) grasp-centre error
+    # leave-one-instance-out on the drills: 12.7 mm (1.0) vs 28.4 mm (0.01) at the functional point
+    # (benchmarks/bench_grasp_warp.py)
+    ridge_alpha: float = 1.0
     grasp_rotation_radius: float = 0.05  # m; see CategoryModel.grasp_rotation_radius
     workers: int | None = None  # None: all cores
     cache_dir: str | None = "out/trial_cache"

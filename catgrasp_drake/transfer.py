@@ -93,16 +93,14 @@ class TransferVisualizer(LeafSystem):
 
     def __init__(self, meshcat: Meshcat, planning_model):
         super().__init__()
-        from catgrasp_drake.grasping.motion import GraspMotion
-        from catgrasp_drake.systems.trajectory_generator import hold_plan
+        from catgrasp_drake.systems.trajectory_generator import hold_plan, placeholder_motion_W
 
         self._meshcat = meshcat
         self._planning = planning_model
         self._cloud = self.DeclareAbstractInputPort("object_cloud_W", AbstractValue.Make(PointCloud()))
         self._estimate = self.DeclareAbstractInputPort("estimate", AbstractValue.Make(object()))
         self._motion = self.DeclareAbstractInputPort("grasp_motion_W", AbstractValue.Make(
-            GraspMotion(np.tile(np.eye(4), (2, 1, 1)), postures={k: np.zeros(9) for k in
-                                                                  ("open", "preshape", "closed")}, frame="world")))
+            placeholder_motion_W()))
         self._plan = self.DeclareAbstractInputPort("plan", AbstractValue.Make(
             hold_plan(np.zeros(6), np.zeros(9), "")))
         self.DeclareInitializationPublishEvent(self._draw)

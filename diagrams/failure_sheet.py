@@ -32,7 +32,7 @@ def main(argv=None) -> int:
     from catgrasp_drake.station.scenario import load_scenario, random_placement, with_instance
     from catgrasp_drake.station.trial import plan_for, trial_diagram
     from catgrasp_drake.transfer import observe
-    from catgrasp_drake.viz.render import contact_sheet
+    from catgrasp_drake.viz.render import contact_sheet, rgb_array
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("category")
@@ -63,8 +63,7 @@ def main(argv=None) -> int:
                     h.plant.GetJointByName(name, h.hand).set_angle(plant_ctx, float(q))
         sensor = h.cameras[scenario.cameras[0].name]
         image = sensor.color_image_output_port().Eval(sensor.GetMyContextFromRoot(context))
-        rgba = np.asarray(image.data, dtype=np.uint8).reshape(image.height(), image.width(), 4)
-        images.append(np.ascontiguousarray(rgba[::2, ::2, :3]))
+        images.append(np.ascontiguousarray(rgb_array(image)[::2, ::2]))
         labels.append(f"{r['instance']} {r['view']}: {r['reason']}")
         print(f"  {labels[-1]}", flush=True)
     if not images:

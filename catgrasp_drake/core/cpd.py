@@ -64,7 +64,7 @@ from typing import Callable
 import numpy as np
 import scipy.linalg
 
-from catgrasp_drake.core.validation import as_points, positive
+from catgrasp_drake.core.validation import as_points, outlier_weight, positive
 from catgrasp_drake.errors import InputError
 
 #: Kernel width (m) used by the project's defaults (tuned on the real drills).
@@ -386,12 +386,7 @@ def _sigma2_update(X, T, e: EStep) -> float:
 def _check_common(source, target, w, max_iter, tol):
     Y = as_points(source, "source", min_points=3)
     X = as_points(target, "target", min_points=3)
-    try:
-        w = float(w)
-    except (TypeError, ValueError):
-        raise InputError(f"w: expected a number in [0, 1), got {w!r}") from None
-    if not (0.0 <= w < 1.0):
-        raise InputError(f"w: the outlier weight must be in [0, 1), got {w}")
+    w = outlier_weight(w)
     if int(max_iter) < 1:
         raise InputError(f"max_iter: must be >= 1, got {max_iter}")
     if not (float(tol) >= 0.0):

@@ -69,7 +69,7 @@ from catgrasp_drake.core.cpd import (
 from catgrasp_drake.core.deformation import deform_points, warp_poses
 from catgrasp_drake.core.rotations import orthonormalize, rotz
 from catgrasp_drake.core.shape_space import ShapeSpace
-from catgrasp_drake.core.validation import as_points, positive
+from catgrasp_drake.core.validation import as_points, outlier_weight, positive
 from catgrasp_drake.core.visibility import DEFAULT_RADIUS_FACTOR, hidden_point_removal
 from catgrasp_drake.errors import InputError
 
@@ -360,12 +360,7 @@ def infer_latent_pose(
         camera = np.asarray(camera_position, dtype=np.float64).reshape(-1)
         if camera.shape != (3,) or not np.all(np.isfinite(camera)):
             raise InputError(f"camera_position: expected a finite 3-vector, got shape {np.shape(camera_position)}")
-    try:
-        w = float(w)
-    except (TypeError, ValueError):
-        raise InputError(f"w: expected a number in [0, 1), got {w!r}") from None
-    if not (0.0 <= w < 1.0):
-        raise InputError(f"w: the outlier weight must be in [0, 1), got {w}")
+    w = outlier_weight(w)
     if prior < 0:
         raise InputError(f"prior: must be >= 0, got {prior}")
     lo, hi = (float(v) for v in scale_bounds)

@@ -61,3 +61,14 @@ def positive(value, name: str) -> float:
     if not np.isfinite(v) or v <= 0.0:
         raise InputError(f"{name}: must be a finite number > 0, got {value!r}")
     return v
+
+
+def outlier_weight(w) -> float:
+    """The uniform-outlier weight of a CPD-style mixture, checked to lie in [0, 1)."""
+    try:
+        w = float(w)
+    except (TypeError, ValueError):
+        raise InputError(f"w: expected a number in [0, 1), got {w!r}") from None
+    if not (0.0 <= w < 1.0):
+        raise InputError(f"w: the outlier weight must be in [0, 1), got {w}")
+    return w

@@ -32,7 +32,7 @@ from pydrake.systems.sensors import CameraInfo
 
 from catgrasp_drake.core.fileio import atomic_write_bytes
 from catgrasp_drake.robot import models
-from catgrasp_drake.viz.render import look_at
+from catgrasp_drake.viz.render import look_at, rgb_array
 
 _RENDERER = "robot_vtk"
 
@@ -73,7 +73,7 @@ def _render(diagram, scene_graph, context, eye, target, size=(480, 480), fov_deg
     w, h = size
     core = RenderCameraCore(_RENDERER, CameraInfo(w, h, np.radians(fov_deg)), ClippingRange(0.01, 20.0), RigidTransform())
     image = query.RenderColorImage(ColorRenderCamera(core, False), scene_graph.world_frame_id(), look_at(eye, target))
-    return np.array(image.data, copy=True)[:, :, :3]
+    return rgb_array(image)
 
 
 def _sheet(images, labels, columns: int) -> bytes:

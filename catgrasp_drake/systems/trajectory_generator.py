@@ -540,6 +540,12 @@ class PlanningModel:
                           q_arm_start=self.q_arm_start, params=params)
 
 
+def placeholder_motion_W() -> GraspMotion:
+    """A valid do-nothing world-frame motion: the model value of abstract ``grasp_motion_W`` ports."""
+    postures = {k: np.zeros(9) for k in ("open", "preshape", "closed")}
+    return GraspMotion(np.tile(np.eye(4), (2, 1, 1)), postures=postures, frame="world")
+
+
 def refusal_status(confidence: float, min_confidence: float) -> str | None:
     """Why a transferred grasp is refused (``None``: go ahead)."""
     if not np.isfinite(confidence) or confidence <= 0.0:
@@ -587,8 +593,7 @@ class MotionTrajectoryGenerator(LeafSystem):
         self._params = params
         self._min_conf = float(min_confidence)
         self._motion_in = self.DeclareAbstractInputPort("grasp_motion_W", AbstractValue.Make(
-            GraspMotion(np.tile(np.eye(4), (2, 1, 1)), postures={k: np.zeros(9) for k in
-                                                                  ("open", "preshape", "closed")}, frame="world")))
+            placeholder_motion_W()))
         self._conf_in = self.DeclareVectorInputPort("confidence", 1)
         from pydrake.perception import PointCloud
 

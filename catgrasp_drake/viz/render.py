@@ -89,6 +89,11 @@ def render_mesh(
     w, h = size
     core = RenderCameraCore(_RENDERER, CameraInfo(w, h, np.radians(fov_y_deg)), ClippingRange(0.01, 10.0), RigidTransform())
     image = query.RenderColorImage(ColorRenderCamera(core, False), scene_graph.world_frame_id(), look_at(eye, center))
+    return rgb_array(image)
+
+
+def rgb_array(image) -> np.ndarray:
+    """A Drake ``ImageRgba8U`` as an (H, W, 3) uint8 array (a copy)."""
     return np.array(image.data, copy=True)[:, :, :3]
 
 
