@@ -4,11 +4,16 @@ Planning (:func:`plan_grasp`) runs once per trial, before the simulation,
 with Drake's ``InverseKinematics`` (SNOPT when available) on the station's
 plant and a scratch context of the station diagram:
 
+- table clearance: the pregrasp and grasp poses are raised (by at most
+  ``max_table_raise``) until the preshaped hand's collision primitives are
+  ``table_clearance`` above the table top;
 - ``home -> pregrasp``: joint-space cubic from the arm's start configuration
-  to the IK solution of the pregrasp pose, solved with a minimum-distance
-  constraint between the robot and the environment (table, object) where
-  feasible; if sampled configurations along the path collide, the path goes
-  through a via pose ``via_height`` above the pregrasp pose.
+  to an IK solution of the pregrasp pose. IK seeds are tried in a fixed
+  order (structured seeds, then ``pregrasp_restarts`` seeded random ones);
+  the first collision-free solution that some approach path reaches wins:
+  direct, through a via pose ``via_heights`` above the pregrasp, or with
+  the elbow raised first. Each path is checked densely in joint space
+  (``approach_margin`` from table and object).
 - ``reach``: pregrasp -> grasp on a straight line (position interpolated,
   orientation slerped), ``reach_knots`` IK knots, each seeded from the
   previous solution so the arm stays on one branch; robot vs table kept
@@ -37,7 +42,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from pydrake.common.value import AbstractValue
-from pydrake.geometry import CollisionFilterDeclaration, GeometrySet, Role
+from pydrake.geometry import Box, Capsule, CollisionFilterDeclaration, Cylinder, GeometrySet, Role, Sphere
 from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.multibody.inverse_kinematics import InverseKinematics
 from pydrake.multibody.plant import MultibodyPlant
@@ -69,10 +74,17 @@ class PlanParams:
     position_tol: float = 1e-3
     orientation_tol: float = 0.01
     min_distance: float = 0.005  # robot vs environment at home->pregrasp
-    via_height: float = 0.15
+    reach_min_distance: float = 0.003  # robot vs table during the reach (preferred, not required)
+    via_heights: tuple[float, ...] = (0.15, 0.30)  # m above the pregrasp, for approaches that need a via
+    approach_margin: float = 0.01  # m, robot vs table/object along the home -> pregrasp path
     max_reach: float = 1.35  # m, shoulder to hand base; beyond -> "unreachable"
     max_knot_jump: float = 0.6  # rad between consecutive knots; above -> "branch_flip"
     wrist_clearance: float = 0.08  # m, wrist-1 origin above the hand base at pregrasp/grasp (if feasible)
+    pregrasp_restarts: int = 12  # random IK restarts after the structured pregrasp seeds
+    # The hand (preshape) at pregrasp and grasp is raised until its lowest point is this far above the
+    # table top; a perceived grasp a few mm too low would otherwise put the palm into the table.
+    table_clearance: float = 0.004  # m
+    max_table_raise: float = 0.03  # m; a hand lower than this under the clearance is refused
 
 
 @dataclass(frozen=True)
@@ -148,12 +160,15 @@ class _Ctx:
     frame_wrist: object  # body frame of the arm's wrist-1 link
     q_full: np.ndarray  # the fixed configuration of everything but the arm
     robot_geoms: GeometrySet
+    hand_ids: list  # proximity geometry ids of the hand
     object_geoms: GeometrySet
     table_geoms: GeometrySet
+    table_ids: list
     shoulder_W: np.ndarray
 
 
-def _geometry_set(plant: MultibodyPlant, scene_graph, instances) -> GeometrySet:
+def _geometry_ids(plant: MultibodyPlant, scene_graph, instances) -> list:
+    """Proximity geometry ids of every body of the model ``instances``."""
     inspector = scene_graph.model_inspector()
     ids = []
     for inst in instances:
@@ -162,7 +177,11 @@ def _geometry_set(plant: MultibodyPlant, scene_graph, instances) -> GeometrySet:
             if fid is None:
                 continue
             ids += list(inspector.GetGeometries(fid, Role.kProximity))
-    return GeometrySet(ids)
+    return ids
+
+
+def _geometry_set(plant: MultibodyPlant, scene_graph, instances) -> GeometrySet:
+    return GeometrySet(_geometry_ids(plant, scene_graph, instances))
 
 
 def _ik(c: _Ctx, X_WH: RigidTransform, q_seed_arm: np.ndarray, params: PlanParams,
@@ -198,11 +217,16 @@ def _ik(c: _Ctx, X_WH: RigidTransform, q_seed_arm: np.ndarray, params: PlanParam
     return True, np.asarray(result.GetSolution(q))[c.arm_q_idx]
 
 
-def _ik_continuous(c: _Ctx, X_WH: RigidTransform, q_prev: np.ndarray, params: PlanParams) -> tuple[bool, np.ndarray]:
-    """IK seeded from the previous knot; the first solution (wrist up, then free) that stays on its branch."""
+def _ik_continuous(c: _Ctx, X_WH: RigidTransform, q_prev: np.ndarray, params: PlanParams,
+                   min_distance: float | None = None) -> tuple[bool, np.ndarray]:
+    """IK seeded from the previous knot; the first solution (wrist up, then free) that stays on its branch.
+
+    With ``min_distance``, solutions keeping every unfiltered pair that far apart come first.
+    """
     best = (False, q_prev)
-    for wrist_up in (True, False):
-        ok, q = _ik(c, X_WH, q_prev, params, wrist_up=wrist_up)
+    attempts = [(True, min_distance), (False, min_distance)] if min_distance is not None else []
+    for wrist_up, distance in attempts + [(True, None), (False, None)]:
+        ok, q = _ik(c, X_WH, q_prev, params, min_distance=distance, wrist_up=wrist_up)
         if ok and np.abs(q - q_prev).max() <= params.max_knot_jump:
             return True, q
         if ok and not best[0]:
@@ -225,6 +249,15 @@ def _collisions(c: _Ctx, q_arm: np.ndarray, margin: float = 0.0) -> list[str]:
     return sorted(out)
 
 
+def _min_distance(c: _Ctx, q_arm: np.ndarray, cap: float) -> float:
+    """Smallest distance (m) between unfiltered geometries at ``q_arm``, or ``cap`` if all are farther."""
+    q = c.q_full.copy()
+    q[c.arm_q_idx] = q_arm
+    c.plant.SetPositions(c.plant_context, q)
+    query = c.scene_graph.get_query_output_port().Eval(c.sg_context)
+    return min([cap] + [pair.distance for pair in query.ComputeSignedDistancePairwiseClosestPoints(cap)])
+
+
 def _robot_collides(c: _Ctx, q_arm: np.ndarray, margin: float = 0.0) -> bool:
     """Any robot geometry closer than ``margin`` to the table or object at ``q_arm``."""
     return bool(_collisions(c, q_arm, margin))
@@ -238,6 +271,100 @@ def _interp_poses(X_A: RigidTransform, X_B: RigidTransform, n: int) -> list[Rigi
         R = RotationMatrix(qa.slerp(s, qb))
         out.append(RigidTransform(R, (1 - s) * X_A.translation() + s * X_B.translation()))
     return out
+
+
+def _lowest_point_z(shape, X_WG: np.ndarray) -> float | None:
+    """World z of the lowest point of a primitive ``shape`` at pose ``X_WG`` (None: not a primitive)."""
+    R, p = X_WG[:3, :3], X_WG[:3, 3]
+    if isinstance(shape, Sphere):
+        return p[2] - shape.radius()
+    if isinstance(shape, Capsule):
+        return p[2] - abs(R[2, 2]) * shape.length() / 2 - shape.radius()
+    if isinstance(shape, Cylinder):
+        return p[2] - abs(R[2, 2]) * shape.length() / 2 - shape.radius() * np.sqrt(max(0.0, 1 - R[2, 2] ** 2))
+    if isinstance(shape, Box):
+        return p[2] - 0.5 * float(np.abs(R[2, :]) @ np.array([shape.width(), shape.depth(), shape.height()]))
+    return None
+
+
+def _table_raise(c: _Ctx, poses_WH: list[RigidTransform], clearance: float) -> float:
+    """Height (m, >= 0) to raise the hand poses by so that the hand (in ``c.q_full``'s posture) clears the table.
+
+    The hand's collision primitives are carried rigidly with frame H; the
+    table top is the highest point of the table's geometry.
+    """
+    plant, inspector = c.plant, c.scene_graph.model_inspector()
+    plant.SetPositions(c.plant_context, c.q_full)
+    query = c.scene_graph.get_query_output_port().Eval(c.sg_context)
+    X_HW = c.frame_H.CalcPoseInWorld(c.plant_context).inverse().GetAsMatrix4()
+    table_top = -np.inf
+    for g in c.table_ids:
+        X_WG = query.GetPoseInWorld(g).GetAsMatrix4()
+        z_low = _lowest_point_z(inspector.GetShape(g), X_WG)
+        if z_low is not None:  # highest point of a primitive = mirror of its lowest about its centre
+            table_top = max(table_top, 2 * X_WG[2, 3] - z_low)
+    if not np.isfinite(table_top):
+        return 0.0
+    hand = [(inspector.GetShape(g), X_HW @ query.GetPoseInWorld(g).GetAsMatrix4())
+            for g in c.hand_ids]
+    lowest = np.inf
+    for X_WH in poses_WH:
+        M = X_WH.GetAsMatrix4()
+        for shape, X_HG in hand:
+            z = _lowest_point_z(shape, M @ X_HG)
+            if z is not None:
+                lowest = min(lowest, z)
+    return max(0.0, table_top + clearance - lowest) if np.isfinite(lowest) else 0.0
+
+
+def _pregrasp_seeds(q_start: np.ndarray, params: PlanParams):
+    """(min_distance, wrist_up, seed) of the pregrasp IK attempts, in order.
+
+    Wrist up, wrist up with minimum distance, free, free with minimum distance; each from the start,
+    from the start with the elbow raised and from that with the wrist turned over (SNOPT is local: one
+    seed can be stuck on the branch that lays the forearm on the table, or twists the wrist under a
+    hand working low); then random restarts about the start (fixed seed: deterministic).
+    """
+    lift = np.array([0.0, -0.4, 0.6, -0.2, 0.0, 0.0])
+    flip = np.array([0.0, 0.0, 0.0, 0.0, 0.85 * np.pi, 1.5 * np.pi])
+    for wrist_up, min_distance in ((True, None), (True, params.min_distance), (False, None),
+                                   (False, params.min_distance)):
+        for seed in (q_start, q_start + lift, q_start + lift + flip):
+            yield min_distance, wrist_up, seed
+    rng = np.random.default_rng(20181)
+    for _ in range(params.pregrasp_restarts):
+        yield params.min_distance, False, q_start + rng.uniform(-1.0, 1.0, 6) * np.array([1.2, 1.0, 1.5, 1.5, np.pi, np.pi])
+
+
+def _path_collides(c: _Ctx, knots: list[np.ndarray], margin: float, step: float = 0.05) -> bool:
+    """Whether the piecewise-linear joint path through ``knots`` comes closer than ``margin`` to anything.
+
+    Checked every ``step`` rad of the largest joint motion (the executed shape-preserving cubic stays
+    between consecutive knots; ``margin`` covers the difference and the tracking error).
+    """
+    for q_a, q_b in zip(knots[:-1], knots[1:]):
+        n = max(1, int(np.ceil(np.abs(q_b - q_a).max() / step)))
+        for s in np.linspace(0.0, 1.0, n + 1)[1:]:
+            if _robot_collides(c, q_a + s * (q_b - q_a), margin):
+                return True
+    return False
+
+
+def _approach_candidates(c: _Ctx, X_WPre: RigidTransform, q_start: np.ndarray, q_pre: np.ndarray,
+                         params: PlanParams):
+    """Knot lists (after the start) ending at ``q_pre``, simplest first (a generator: IK runs on demand)."""
+    yield [q_pre]
+    vias = []
+    for height in params.via_heights:
+        X_via = RigidTransform(X_WPre.rotation(), X_WPre.translation() + [0.0, 0.0, height])
+        ok, q_via = _ik(c, X_via, q_pre, params, min_distance=params.min_distance)
+        if ok:
+            vias.append(q_via)
+            yield [q_via, q_pre]
+    q_raised = q_start + np.array([0.0, -0.4, 0.6, -0.2, 0.0, 0.0])  # shoulder up, elbow bent
+    yield [q_raised, q_pre]
+    for q_via in vias:
+        yield [q_raised, q_via, q_pre]
 
 
 # ----------------------------------------------------------------------------- planner
@@ -282,9 +409,13 @@ def plan_grasp(plant: MultibodyPlant, plant_context, scene_graph, sg_context, *,
     plant.SetPositions(plant_context, q_tmp)
     shoulder_W = shoulder.CalcPoseInWorld(plant_context).translation()
     frame_wrist = plant.GetJointByName(ARM_JOINTS[3], arm).child_body().body_frame()
+    object_instances = [object_instance] if object_instance is not None else []
     c = _Ctx(plant, plant_context, sg_context, scene_graph, arm_q_idx, hand_q_idx, frame_H, frame_wrist, q_full,
-             _geometry_set(plant, scene_graph, [arm, hand]), _geometry_set(plant, scene_graph, [object_instance] if object_instance is not None else []),
-             _geometry_set(plant, scene_graph, [table]), shoulder_W)
+             robot_geoms=_geometry_set(plant, scene_graph, [arm, hand]),
+             hand_ids=_geometry_ids(plant, scene_graph, [hand]),
+             object_geoms=_geometry_set(plant, scene_graph, object_instances),
+             table_geoms=_geometry_set(plant, scene_graph, [table]),
+             table_ids=_geometry_ids(plant, scene_graph, [table]), shoulder_W=shoulder_W)
 
     # Planning-only collision filters: robot vs itself and object vs table never count.
     manager = scene_graph.collision_filter_manager(sg_context)
@@ -292,50 +423,49 @@ def plan_grasp(plant: MultibodyPlant, plant_context, scene_graph, sg_context, *,
                   .ExcludeBetween(c.object_geoms, c.table_geoms))
 
     X = {name: RigidTransform(motion_W.pose(name)) for name in ("pregrasp", "grasp")}
+    raise_m = _table_raise(c, list(X.values()), params.table_clearance)
+    if raise_m > params.max_table_raise:
+        return fail(f"collision: hand {1000 * (raise_m - params.table_clearance):.0f} mm into the table")
+    X = {name: RigidTransform(X_WH.rotation(), X_WH.translation() + [0.0, 0.0, raise_m]) for name, X_WH in X.items()}
     for name, X_WH in X.items():
         if np.linalg.norm(X_WH.translation() - shoulder_W) > params.max_reach:
             return fail(f"unreachable: {name}")
 
-    # --- pregrasp: the first collision-free IK solution of, in order: wrist up, wrist up with minimum
-    # distance, free with minimum distance; each from the start configuration, from the start with the
-    # elbow raised and from that with the wrist turned over (SNOPT is local: one seed can be stuck on the
-    # branch that lays the forearm on the table, or twists the wrist under a hand working low)
-    lift = np.array([0.0, -0.4, 0.6, -0.2, 0.0, 0.0])
-    flip = np.array([0.0, 0.0, 0.0, 0.0, 0.85 * np.pi, 1.5 * np.pi])
-    seeds = (q_arm_start, q_arm_start + lift, q_arm_start + lift + flip)
-    q_pre_arm, first = None, None
-    for wrist_up, min_distance in ((True, None), (True, params.min_distance), (False, None),
-                                   (False, params.min_distance)):
-        for seed in seeds:
-            ok, q = _ik(c, X["pregrasp"], seed, params, min_distance=min_distance, wrist_up=wrist_up)
-            if not ok:
-                continue
-            first = q if first is None else first
-            if not _robot_collides(c, q):
-                q_pre_arm = q
+    # --- pregrasp and the approach to it: the first collision-free pregrasp IK solution (in the order of
+    # _pregrasp_seeds) that an approach path from the start reaches without meeting the table or object
+    attempts = []  # (ok, q_pre) of every IK solved
+    q_pre_arm = approach_knots = None
+    for min_distance, wrist_up, seed in _pregrasp_seeds(q_arm_start, params):
+        ok, q = _ik(c, X["pregrasp"], seed, params, min_distance=min_distance, wrist_up=wrist_up)
+        if not ok or any(np.abs(q - q_seen).max() < 1e-3 for _, q_seen in attempts):
+            continue
+        free = not _robot_collides(c, q)
+        attempts.append((free, q))
+        if not free:
+            continue
+        # the margin shrinks to what the pregrasp itself leaves (a hand working low over the table)
+        margin = min(params.approach_margin, 0.5 * _min_distance(c, q, params.approach_margin))
+        for candidate in _approach_candidates(c, X["pregrasp"], q_arm_start, q, params):
+            if not _path_collides(c, [q_arm_start] + candidate, margin):
+                q_pre_arm, approach_knots = q, candidate
                 break
         if q_pre_arm is not None:
             break
     if q_pre_arm is None:
-        if first is None:
+        if not attempts:
             return fail("ik_failed: pregrasp")
-        return fail(f"collision: pregrasp ({'; '.join(_collisions(c, first)[:3])})")
-
-    # --- home -> pregrasp: check samples, else go through a via pose above the pregrasp
-    approach_knots = [q_pre_arm]
-    samples = [q_arm_start + s * (q_pre_arm - q_arm_start) for s in np.linspace(0.1, 0.9, 9)]
-    if any(_robot_collides(c, q) for q in samples):
-        X_via = RigidTransform(X["pregrasp"].rotation(), X["pregrasp"].translation() + [0, 0, params.via_height])
-        ok_via, q_via = _ik(c, X_via, q_pre_arm, params, min_distance=params.min_distance)
-        if ok_via:
-            approach_knots = [q_via, q_pre_arm]
+        if not any(free for free, _ in attempts):
+            return fail(f"collision: pregrasp ({'; '.join(_collisions(c, attempts[0][1])[:3])})")
+        return fail("collision: approach (every path from the start to the pregrasp meets the table or object)")
 
     # --- reach: straight line pregrasp -> grasp, robot vs table only
     id_obj = manager.ApplyTransient(CollisionFilterDeclaration().ExcludeBetween(c.robot_geoms, c.object_geoms))
     reach = []
     q_prev = q_pre_arm
     for k, X_WH in enumerate(_interp_poses(X["pregrasp"], X["grasp"], params.reach_knots)):
-        ok, q_k = _ik_continuous(c, X_WH, q_prev, params)
+        # robot vs table kept apart where possible: an arm grazing the table at the grasp lies on it once
+        # the controller tracks the plan under load
+        ok, q_k = _ik_continuous(c, X_WH, q_prev, params, min_distance=params.reach_min_distance)
         last = k == params.reach_knots - 1
         if not ok:
             manager.RemoveDeclaration(id_obj)
@@ -384,8 +514,10 @@ def plan_grasp(plant: MultibodyPlant, plant_context, scene_graph, sg_context, *,
     tl["approach"] = t
     knot(t, q_arm_start, q_open, "approach")
     n_app = len(approach_knots)
+    segment = np.abs(np.diff(path, axis=0)).max(axis=1)  # time along the approach ~ largest joint motion
+    share = np.cumsum(segment) / segment.sum() if segment.sum() > 0 else np.arange(1, n_app + 1) / n_app
     for i, q in enumerate(approach_knots):
-        knot(t + t_approach_dur * (i + 1) / n_app, q, q_open + (q_pre - q_open) * (i + 1) / n_app,
+        knot(t + t_approach_dur * share[i], q, q_open + (q_pre - q_open) * (i + 1) / n_app,
              "via" if i < n_app - 1 else "pregrasp")
     t += t_approach_dur
     tl["reach"] = t

@@ -1,0 +1,101 @@
+"""The grasp planner's guarantees, checked on the planned (executed) trajectories with Drake's distance queries.
+
+- a grasp predicted a little too low is raised until the preshaped hand
+  clears the table by ``table_clearance``; one far too low is refused;
+- the executed home -> pregrasp trajectory (the shape-preserving cubic, not
+  just its knots) keeps the robot off the table and the object.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from catgrasp_drake.grasping.motion import GraspMotion
+from catgrasp_drake.robot.models import ARM_JOINTS
+from catgrasp_drake.station.builder import hand_joint_angles, make_planning_model
+from catgrasp_drake.station.handwritten import load_handwritten_motion
+from catgrasp_drake.station.scenario import load_scenario
+from catgrasp_drake.systems.trajectory_generator import PlanParams
+
+
+@pytest.fixture(scope="module")
+def drill():
+    scenario = load_scenario("drill_default")
+    planning = make_planning_model(scenario)
+    motion_W = load_handwritten_motion("drill", "drill_00").in_world(scenario.X_WO())
+    return planning, motion_W
+
+
+def _shifted(motion: GraspMotion, dz: float) -> GraspMotion:
+    poses = motion.poses.copy()
+    poses[:, 2, 3] += dz
+    return dataclasses.replace(motion, poses=poses)
+
+
+def _distances_to_table(planning, q_arm, q_hand) -> dict[str, float]:
+    """Smallest distance (m) from each robot body (arm or hand) to the table at ``q_arm`` / ``q_hand``."""
+    plant, sg = planning.plant, planning.scene_graph
+    ctx = planning.diagram.CreateDefaultContext()
+    pc = plant.GetMyMutableContextFromRoot(ctx)
+    for name, q in zip(ARM_JOINTS, q_arm):
+        plant.GetJointByName(name, planning.arm).set_angle(pc, q)
+    for name, q in hand_joint_angles(q_hand).items():
+        plant.GetJointByName(name, planning.hand).set_angle(pc, q)
+    query = sg.get_query_output_port().Eval(sg.GetMyContextFromRoot(ctx))
+    inspector = query.inspector()
+    out = {}
+    for pair in query.ComputeSignedDistancePairwiseClosestPoints(0.2):
+        names = [inspector.GetName(inspector.GetFrameId(g)) for g in (pair.id_A, pair.id_B)]
+        table = [n for n in names if n.startswith("table::")]
+        robot = [n for n in names if n.startswith(("ur10::", "svh::"))]
+        if table and robot:
+            out[robot[0]] = min(out.get(robot[0], np.inf), pair.distance)
+    return out
+
+
+def _hand_clearance(planning, plan, knot: str) -> float:
+    i = plan.knot_names.index(knot)
+    d = _distances_to_table(planning, plan.q_arm[i], plan.q_hand[i])
+    return min(v for k, v in d.items() if k.startswith("svh::"))
+
+
+def test_a_grasp_slightly_too_low_is_raised_to_the_table_clearance(drill):
+    planning, motion_W = drill
+    params = PlanParams()
+    reference = planning.plan(motion_W, params)
+    assert reference.ok
+    clearance_ref = _hand_clearance(planning, reference, "grasp")
+    # lower the whole motion until the hand would sit 6 mm INTO the table
+    low = _shifted(motion_W, -(clearance_ref + 0.006))
+    plan = planning.plan(low, params)
+    assert plan.ok, plan.status
+    clearance = _hand_clearance(planning, plan, "grasp")
+    # raised to the clearance (the primitives' lowest point vs Drake's distance: within 1 mm)
+    assert clearance == pytest.approx(params.table_clearance, abs=1e-3)
+
+
+def test_a_grasp_far_below_the_table_is_refused(drill):
+    planning, motion_W = drill
+    plan = planning.plan(_shifted(motion_W, -0.08), PlanParams())
+    assert not plan.ok
+    assert plan.status.startswith("collision: hand") and "into the table" in plan.status
+
+
+def test_the_executed_approach_keeps_the_robot_off_the_table(drill):
+    planning, motion_W = drill
+    plan = planning.plan(motion_W, PlanParams())
+    assert plan.ok
+    trajectory = plan.arm_trajectory()
+    t0, t1 = plan.timeline.approach, plan.timeline.reach
+    i_pre = plan.knot_names.index("pregrasp")
+    worst = np.inf
+    for t in np.linspace(t0, t1, 60):
+        # hand posture: as the generator interpolates it (open -> preshape, linear in time)
+        q_hand = np.array([np.interp(t, plan.times, plan.q_hand[:, j]) for j in range(plan.q_hand.shape[1])])
+        d = _distances_to_table(planning, trajectory.value(t).ravel(), q_hand)
+        worst = min([worst] + list(d.values()))
+    assert worst > 0.0
+    assert i_pre > 0
