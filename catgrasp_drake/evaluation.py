@@ -19,7 +19,11 @@ folder (re-used when present).
 Outputs (``evaluate``): per-trial records (JSON lines), Table I per method next
 to the paper's figures (also as a PNG chart), inference times, and the confidence analysis (AUROC of
 the estimator's confidence against functional success; success rate when the
-least confident 20 % are refused).
+least confident 20 % are refused). Every file is written atomically; ``records.jsonl``
+starts with a header line (format, version, record count, sha256 of the record lines) and
+``report.json`` carries its format, version and sha256, checked by :func:`load_records` and
+:func:`load_report`. A trial's cache key includes the sha256 of its fold model file, so a
+retrained model never reuses trials of the old one.
 """
 
 from __future__ import annotations
@@ -36,6 +40,12 @@ from catgrasp_drake.baselines import METHODS
 from catgrasp_drake.errors import InputError
 
 VIEWS = ("full", "single")
+RECORDS_FORMAT = "catgrasp.eval_records"
+REPORT_FORMAT = "catgrasp.eval_report"
+FORMAT_VERSION = 1
+#: Fields of a trial record that are wall-clock timings (vary from run to run); every other field
+#: is a deterministic function of the trial's spec and the code.
+TIMING_FIELDS = ("inference_s", "observe_s", "trial_wall_s")
 #: Number of leave-two-out folds per category (DESIGN.md section 7).
 FOLDS = {"drill": 6, "spray_bottle": 7, "mug": 7}
 #: The paper's Table I (successes, trials) per category: grasp / functional x full / partial view.
@@ -123,10 +133,16 @@ def eval_code_version() -> str:
 
 def fold_model(config: EvalConfig, fold: int, train: list[str], progress=None) -> Path:
     """The fold's model file under ``out_dir`` (trained unless already there)."""
+    from catgrasp_drake.category_model import CategoryModel
+    from catgrasp_drake.errors import ModelFileError
     from catgrasp_drake.training import TrainingConfig, train_category
 
     path = Path(config.out_dir) / config.category / f"fold{fold}.npz"
     if path.is_file():
+        try:
+            CategoryModel.load(path, category=config.category)  # checks format, version and checksum
+        except (ModelFileError, InputError) as e:
+            raise ModelFileError(f"{str(e).splitlines()[0]} (fold {fold} model; delete it to retrain it)") from None
         return path
     tc = TrainingConfig(samples_per_instance=config.samples_per_instance, seed=config.seed,
                         workers=config.workers, canonical_instance=train[0], ray=config.ray)
@@ -134,7 +150,15 @@ def fold_model(config: EvalConfig, fold: int, train: list[str], progress=None) -
     return path
 
 
+def file_sha256(path: str | Path) -> str:
+    import hashlib
+
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
 def trial_specs(config: EvalConfig, models: dict[int, str], folds) -> list[dict]:
+    """One task spec per (test instance, view, method); ``model_sha256`` keys the cache by the model's content."""
+    digests = {k: file_sha256(m) for k, m in models.items()}
     specs = []
     for k, (_, test) in enumerate(folds):
         for instance in test:
@@ -143,8 +167,8 @@ def trial_specs(config: EvalConfig, models: dict[int, str], folds) -> list[dict]
             for view in config.views:
                 for method in config.methods:
                     specs.append({"task": "eval_trial", "category": config.category, "fold": k,
-                                  "model": models[k], "instance": instance, "view": view, "method": method,
-                                  "seed": config.seed})
+                                  "model": models[k], "model_sha256": digests[k], "instance": instance,
+                                  "view": view, "method": method, "seed": config.seed})
     return specs
 
 
@@ -215,7 +239,6 @@ class EvalReport:
 
 def evaluate(config: EvalConfig, *, progress: Callable[[str, int, int], None] | None = None) -> EvalReport:
     """Run the protocol (module docstring); writes ``<out_dir>/<category>/records.jsonl`` and ``report.json``."""
-    from catgrasp_drake.core.fileio import atomic_write_text
     from catgrasp_drake.runner import run_tasks
 
     t0 = time.perf_counter()
@@ -249,12 +272,11 @@ def evaluate(config: EvalConfig, *, progress: Callable[[str, int, int], None] | 
     report = EvalReport(config, records, table_one(records),
                         confidence_analysis([r for r in records if r["method"] == "latent"]), times,
                         time.perf_counter() - t0)
-    atomic_write_text(out / "records.jsonl", "".join(json.dumps(r, sort_keys=True) + "\n" for r in records))
+    write_records(out / "records.jsonl", records)
     write_chart(config.category, report.table, out / "table.png")
-    atomic_write_text(out / "report.json", json.dumps({
+    write_report(out / "report.json", {
         "config": asdict(config), "table": report.table, "confidence_latent": report.confidence,
-        "inference_s": times, "wall_s": report.wall_s, "paper": PAPER_TABLE.get(config.category)},
-        indent=1, default=str) + "\n")
+        "inference_s": times, "wall_s": report.wall_s, "paper": PAPER_TABLE.get(config.category)})
     return report
 
 
@@ -266,11 +288,96 @@ def write_chart(category: str, table: dict, path) -> None:
     table_chart(category, rows, path)
 
 
+def _sha256_text(text: str) -> str:
+    import hashlib
+
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+def write_records(path: str | Path, records: list[dict]) -> None:
+    """Write trial records as JSON lines (atomically), after a header line with their count and sha256."""
+    from catgrasp_drake.core.fileio import atomic_write_text
+
+    body = "".join(json.dumps(r, sort_keys=True) + "\n" for r in records)
+    header = {"format": RECORDS_FORMAT, "format_version": FORMAT_VERSION, "records": len(records),
+              "sha256": _sha256_text(body)}
+    atomic_write_text(path, json.dumps(header, sort_keys=True) + "\n" + body)
+
+
 def load_records(path: str | Path) -> list[dict]:
-    """Read a ``records.jsonl`` back (one JSON object per line)."""
+    """Read a ``records.jsonl`` back (one JSON object per trial, after the header line).
+
+    Raises ModelFileError, with a one-line message naming the file, when it is
+    unreadable, not JSON lines, of another format or version, or does not
+    match its header's record count and checksum. (A file without the header
+    line, written before it existed, is read without the checks.)
+    """
     from catgrasp_drake.errors import ModelFileError
 
+    path = Path(path)
     try:
-        return [json.loads(line) for line in Path(path).read_text().splitlines() if line.strip()]
+        text = path.read_text(encoding="utf-8")
     except (OSError, ValueError) as e:
-        raise ModelFileError(f"{path}: unreadable evaluation records ({e})") from None
+        raise ModelFileError(f"{path}: unreadable evaluation records ({type(e).__name__}: "
+                             f"{str(e).splitlines()[0] if str(e) else ''})") from None
+    lines = text.splitlines(keepends=True)
+    header = None
+    if lines:
+        try:
+            first = json.loads(lines[0])
+        except ValueError:
+            first = None
+        if isinstance(first, dict) and "format" in first:
+            header, lines = first, lines[1:]
+    if header is not None:
+        if header.get("format") != RECORDS_FORMAT:
+            raise ModelFileError(f"{path}: is a {header.get('format')!r} file, expected {RECORDS_FORMAT!r}")
+        if header.get("format_version") != FORMAT_VERSION:
+            raise ModelFileError(f"{path}: format version {header.get('format_version')} but this catgrasp_drake "
+                                 f"reads version {FORMAT_VERSION}; re-run the evaluation")
+        if header.get("sha256") != _sha256_text("".join(lines)):
+            raise ModelFileError(f"{path}: checksum mismatch ({len(lines)} record lines, header says "
+                                 f"{header.get('records')}); the file is corrupt or was edited")
+    records = []
+    for n, line in enumerate(lines, start=2 if header is not None else 1):
+        if not line.strip():
+            continue
+        try:
+            r = json.loads(line)
+        except ValueError as e:
+            raise ModelFileError(f"{path}: line {n} is not JSON ({e}); the file is corrupt") from None
+        if not isinstance(r, dict):
+            raise ModelFileError(f"{path}: line {n} is a JSON {type(r).__name__}, not a trial record")
+        records.append(r)
+    return records
+
+
+def write_report(path: str | Path, report: dict) -> None:
+    """Write ``report.json`` atomically with its format, version and sha256 (over the other fields)."""
+    from catgrasp_drake.core.fileio import atomic_write_text
+
+    body = json.loads(json.dumps(report, default=str))  # what the file will hold
+    out = {"format": REPORT_FORMAT, "format_version": FORMAT_VERSION} | body
+    out["sha256"] = _sha256_text(json.dumps(out, sort_keys=True))
+    atomic_write_text(path, json.dumps(out, indent=1, sort_keys=True) + "\n")
+
+
+def load_report(path: str | Path) -> dict:
+    """Read ``report.json`` back; ModelFileError (one line, naming the file) when corrupt or of another format."""
+    from catgrasp_drake.errors import ModelFileError
+
+    path = Path(path)
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError) as e:
+        raise ModelFileError(f"{path}: unreadable evaluation report ({type(e).__name__}: "
+                             f"{str(e).splitlines()[0] if str(e) else ''})") from None
+    if not isinstance(data, dict) or data.get("format") != REPORT_FORMAT:
+        raise ModelFileError(f"{path}: not an evaluation report (format {REPORT_FORMAT!r})")
+    if data.get("format_version") != FORMAT_VERSION:
+        raise ModelFileError(f"{path}: format version {data.get('format_version')} but this catgrasp_drake reads "
+                             f"version {FORMAT_VERSION}; re-run the evaluation")
+    body = {k: v for k, v in data.items() if k != "sha256"}
+    if data.get("sha256") != _sha256_text(json.dumps(body, sort_keys=True)):
+        raise ModelFileError(f"{path}: checksum mismatch; the file is corrupt or was edited")
+    return body

@@ -8,8 +8,17 @@ the hash of (task spec, code fingerprint). Hence:
 * re-running never recomputes what is already known (same spec, same code);
 * a run killed at any moment (even ``kill -9``) resumes without losing or
   double-counting a finished task: a result file either exists whole or not;
-* a task that raises becomes a result ``{"status": "error", "error": ...}``
-  rather than a dead run.
+* a task that raises (including the ``SystemExit`` that pydrake raises for a
+  failed ``DRAKE_DEMAND`` inside Drake) becomes a result
+  ``{"status": "error", "error": ...}`` rather than a dead run; a worker
+  process that dies outright (segfault, OOM kill) does not take the run with
+  it: the tasks it may have been running are re-run one at a time in a fresh
+  worker, and the one that kills its worker again becomes an error result
+  (not cached, so a later run tries it again).
+
+Every cache file carries a format name, a format version and a sha256 of its
+content; an unreadable, truncated, edited or foreign file is recomputed (and
+atomically overwritten), never trusted.
 
 The task function must be a module-level callable (importable by workers)
 taking the spec dict and returning a JSON-able dict.
@@ -20,8 +29,10 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import signal
 import traceback
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
 from multiprocessing import get_context
 from pathlib import Path
@@ -76,13 +87,26 @@ def _run_one(fn: Callable[[dict], dict], spec: dict) -> dict:
         if not isinstance(result, dict):
             raise TypeError(f"task function returned {type(result).__name__}, expected dict")
         result.setdefault("status", "ok")
+        json.dumps(result)  # must be storable: a result that is not JSON-able is an error, not a dead run
         return result
-    except Exception as e:  # a failed trial is an outcome, not a dead run
+    # a failed trial is an outcome, not a dead run. SystemExit too: pydrake turns a failed
+    # DRAKE_DEMAND/DRAKE_THROW (e.g. a mesh face with an out-of-range vertex) into SystemExit.
+    except (Exception, SystemExit) as e:
         return {
             "status": "error",
-            "error": f"{type(e).__name__}: {e}".splitlines()[0][:500],
+            "error": (f"{type(e).__name__}: {e}".splitlines() or [type(e).__name__])[0][:500],
             "traceback": traceback.format_exc(limit=5)[-2000:],
         }
+
+
+#: Format of the cache files (``TaskCache``).
+CACHE_FORMAT = "catgrasp.task_result"
+CACHE_FORMAT_VERSION = 1
+
+
+def _record_checksum(record: Mapping[str, Any]) -> str:
+    body = {k: record.get(k) for k in ("key", "code_version", "spec", "result")}
+    return hashlib.sha256(json.dumps(body, sort_keys=True, separators=(",", ":")).encode()).hexdigest()
 
 
 class TaskCache:
@@ -97,19 +121,29 @@ class TaskCache:
         return self.directory / f"{key}.json"
 
     def get(self, key: str) -> dict | None:
+        """The cached result of ``key``, or None when absent, of another code version, or not a whole,
+        valid cache file (unreadable, truncated, edited: it is then recomputed and overwritten)."""
         p = self.path(key)
         try:
-            record = json.loads(p.read_text())
+            record = json.loads(p.read_text(encoding="utf-8"))
         except FileNotFoundError:
             return None
-        except (OSError, json.JSONDecodeError):
-            return None  # unreadable: recompute (and overwrite atomically)
-        if record.get("code_version") != self.code_version:
+        except (OSError, ValueError):  # unreadable, not UTF-8, not JSON: recompute
             return None
-        return record.get("result")
+        if not isinstance(record, dict) or record.get("key") != key:
+            return None
+        if record.get("code_version") != self.code_version or not isinstance(record.get("result"), dict):
+            return None
+        if "format" in record or "sha256" in record:  # files without them predate the checksum: trusted as before
+            if (record.get("format") != CACHE_FORMAT or record.get("format_version") != CACHE_FORMAT_VERSION
+                    or record.get("sha256") != _record_checksum(record)):
+                return None
+        return record["result"]
 
     def put(self, key: str, spec: dict, result: dict) -> None:
-        record = {"key": key, "code_version": self.code_version, "spec": spec, "result": result}
+        record = {"format": CACHE_FORMAT, "format_version": CACHE_FORMAT_VERSION, "key": key,
+                  "code_version": self.code_version, "spec": spec, "result": result}
+        record["sha256"] = _record_checksum(record)
         atomic_write_text(self.path(key), json.dumps(record, sort_keys=True, indent=1) + "\n")
 
 
@@ -158,7 +192,7 @@ def run_tasks(
 
     def finish(k: str, result: dict, cached: bool) -> None:
         nonlocal done
-        if cache and not cached:
+        if cache and not cached and not result.get("worker_died"):  # a dead worker may be transient: retry later
             cache.put(k, todo[k], result)
         results[k] = (result, cached)
         done += 1
@@ -177,14 +211,97 @@ def run_tasks(
         for k, s in todo.items():
             finish(k, _run_one(fn, s), False)
     else:
-        with ProcessPoolExecutor(max_workers=min(n_workers, len(todo)), mp_context=get_context("spawn")) as pool:
-            pending = {pool.submit(_run_one, fn, s): k for k, s in todo.items()}
-            while pending:
+        _run_in_processes(fn, todo, finish, n_workers)
+    return [TaskOutcome(k, spec_of[k], *results[k]) for k in keys]
+
+
+def _dead_worker_result(exitcode: int | None) -> dict:
+    if exitcode is not None and exitcode < 0:
+        try:
+            how = f"was killed by {signal.Signals(-exitcode).name}"
+        except ValueError:
+            how = f"was killed by signal {-exitcode}"
+    else:
+        how = f"ended with exit code {exitcode}" if exitcode is not None else "died"
+    return {"status": "error", "error": f"WorkerDied: the worker process running this task {how}",
+            "worker_died": True}
+
+
+def _pool_round(fn, todo: dict, finish, n_workers: int) -> tuple[list[str], int | None]:
+    """Run ``todo`` in one pool of spawned workers, at most ``n_workers`` tasks submitted at a time (so a
+    submitted task is a running one); finished tasks are reported through ``finish``. Returns
+    ``([], None)`` when all finished, else, when a worker died, the keys that were in flight and a dead
+    worker's exit code (the tasks never started are simply not reported)."""
+    queue = list(todo)
+    pool = ProcessPoolExecutor(max_workers=min(n_workers, len(queue)), mp_context=get_context("spawn"))
+    pending: dict = {}
+    procs: dict = {}  # the pool's worker processes, kept to read a dead one's exit code
+    try:
+        while queue or pending:
+            broken = False
+            while queue and len(pending) < n_workers and not broken:
+                try:
+                    pending[pool.submit(_run_one, fn, todo[queue[0]])] = queue[0]
+                    queue.pop(0)
+                except BrokenProcessPool:
+                    broken = True
+                procs.update(getattr(pool, "_processes", None) or {})
+            if not broken:
                 finished, _ = wait(pending, return_when=FIRST_COMPLETED)
                 for fut in finished:
-                    k = pending.pop(fut)
-                    finish(k, fut.result(), False)
-    return [TaskOutcome(k, spec_of[k], *results[k]) for k in keys]
+                    try:
+                        result = fut.result()
+                    except BrokenProcessPool:
+                        broken = True
+                        continue
+                    finish(pending.pop(fut), result, False)
+            if broken:  # a worker died: harvest what finished, report the rest as in flight
+                wait(pending)  # a broken pool fails every pending future promptly
+                in_flight = []
+                for fut, k in pending.items():
+                    try:
+                        result = fut.result()
+                    except BrokenProcessPool:
+                        in_flight.append(k)
+                        continue
+                    finish(k, result, False)
+                pool.shutdown(wait=True, cancel_futures=True)
+                for proc in procs.values():
+                    proc.join(timeout=5.0)
+                codes = [proc.exitcode for proc in procs.values() if proc.exitcode not in (None, 0)]
+                return [k for k in todo if k in in_flight], (codes[0] if codes else None)
+    except BaseException:  # e.g. Ctrl-C: drop the queued tasks instead of running them to the end
+        pool.shutdown(wait=False, cancel_futures=True)
+        raise
+    pool.shutdown(wait=True)
+    return [], None
+
+
+def _run_in_processes(fn, todo: dict, finish, n_workers: int) -> None:
+    """Run ``todo`` in spawned worker processes; a dead worker costs its own task, not the run.
+
+    When a worker dies (segfault, abort, OOM kill), the tasks that were in flight are run again one at a
+    time, each in a fresh single-worker pool: the one that kills its worker again becomes a
+    ``WorkerDied`` error result; the others, and every task not yet started, go on in a new pool.
+    """
+    remaining = dict(todo)
+
+    def done(k: str, result: dict, cached: bool = False) -> None:
+        remaining.pop(k, None)
+        finish(k, result, cached)
+
+    idle_breaks = 0
+    while remaining:
+        n_before = len(remaining)
+        in_flight, code = _pool_round(fn, dict(remaining), done, n_workers)
+        for k in in_flight:
+            again, code = _pool_round(fn, {k: remaining[k]}, done, 1)
+            if again:
+                done(k, _dead_worker_result(code))
+        idle_breaks = idle_breaks + 1 if len(remaining) == n_before else 0
+        if idle_breaks >= 3:  # workers keep dying with no task running: give up on the rest, not forever
+            for k in list(remaining):
+                done(k, _dead_worker_result(code))
 
 
 def _ray_module():
@@ -210,4 +327,9 @@ def _run_on_ray(fn, todo: dict, finish, address: str, n_workers: int) -> None:
         ready, _ = ray.wait(list(pending), num_returns=1)
         for ref in ready:
             k = pending.pop(ref)
-            finish(k, ray.get(ref), False)
+            try:
+                result = ray.get(ref)
+            except ray.exceptions.RayError as e:  # the worker died (after Ray's own retries): this task fails
+                result = {"status": "error", "worker_died": True,
+                          "error": (f"{type(e).__name__}: {e}".splitlines() or ["RayError"])[0][:500]}
+            finish(k, result, False)

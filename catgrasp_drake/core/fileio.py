@@ -6,11 +6,14 @@ plus one array ``__header__`` holding a UTF-8 JSON document with at least
 covers every array's name, dtype, shape and bytes, so a corrupt or edited file
 is detected on load. Writes go to a temporary file in the same directory,
 are fsync'ed and then renamed over the target: a reader never sees half a file.
+The archive holds no wall-clock time (numpy writes every member with the zip
+epoch as its date), so the same arrays and header always give the same bytes.
 """
 
 from __future__ import annotations
 
 import hashlib
+import io
 import json
 import os
 import tempfile
@@ -22,6 +25,11 @@ import numpy as np
 from catgrasp_drake.errors import ModelFileError
 
 _HEADER_KEY = "__header__"
+
+
+def _one_line(e: BaseException) -> str:
+    text = str(e).strip()
+    return f"{type(e).__name__}: {text.splitlines()[0]}" if text else type(e).__name__
 
 
 def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> None:
@@ -84,11 +92,9 @@ def save_arrays(
         "sha256": _arrays_checksum(arrays),
         "meta": dict(meta or {}),
     }
-    import io
-
     buf = io.BytesIO()
     header_array = np.frombuffer(json.dumps(header, sort_keys=True).encode("utf-8"), dtype=np.uint8)
-    np.savez_compressed(buf, **{_HEADER_KEY: header_array}, **arrays)
+    np.savez_compressed(buf, **{_HEADER_KEY: header_array}, **arrays)  # object arrays refused above: no pickle
     atomic_write_bytes(path, buf.getvalue())
 
 
@@ -107,13 +113,15 @@ def load_arrays(
         with np.load(path, allow_pickle=False) as z:
             arrays = {k: z[k] for k in z.files}
     except Exception as e:  # zipfile, zlib, numpy header errors: all mean "corrupt"
-        raise ModelFileError(f"{path}: not a readable {kind} file ({type(e).__name__}: {e})") from None
+        raise ModelFileError(f"{path}: not a readable {kind} file ({_one_line(e)})") from None
     if _HEADER_KEY not in arrays:
         raise ModelFileError(f"{path}: no header; not a {kind} file")
     try:
         header = json.loads(arrays.pop(_HEADER_KEY).tobytes().decode("utf-8"))
     except (UnicodeDecodeError, json.JSONDecodeError):
         raise ModelFileError(f"{path}: corrupt header") from None
+    if not isinstance(header, dict):
+        raise ModelFileError(f"{path}: corrupt header (not a JSON object); not a {kind} file")
     if header.get("format") != kind:
         raise ModelFileError(f"{path}: is a {header.get('format')!r} file, expected {kind!r}")
     if header.get("format_version") != version:

@@ -1,0 +1,368 @@
+"""Faults: kill -9 and resume, trials that throw inside Drake, dead workers, corrupt files.
+
+The kill tests run the real ``catgrasp`` command line in a subprocess, SIGKILL its whole process
+group (the CLI and its worker processes) once some but not all trials are cached, run the same
+command again, and compare with an uninterrupted run of the same seed: the model array by array,
+bit for bit; the evaluation records field by field except the named timing fields.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import signal
+from pathlib import Path
+
+import pytest
+
+from catgrasp_drake.errors import ModelFileError
+from catgrasp_drake.runner import TaskCache, run_tasks, task_key
+
+from . import tiny_runs as tiny
+
+pytestmark = pytest.mark.filterwarnings("ignore::DeprecationWarning")
+
+
+def _one_line_naming(message: str, path) -> None:
+    assert message and "\n" not in message, message
+    assert str(path) in message, message
+
+
+def _check_cache_files(cache: Path) -> dict[str, dict]:
+    """Every cached trial is a whole, checksummed file named by its spec's key; returns key -> record."""
+    out = {}
+    for f in tiny.cached_files(cache):
+        record = json.loads(f.read_text())  # raises on a half-written file
+        assert f.stem == record["key"]
+        assert task_key(record["spec"], record["code_version"]) == record["key"]
+        assert TaskCache(cache, record["code_version"]).get(record["key"]) == record["result"]  # checksum ok
+        out[record["key"]] = record
+    return out
+
+
+# ----------------------------------------------------------------------------- kill -9: training
+@pytest.mark.slow
+def test_kill_minus_9_during_training_then_resume_gives_the_uninterrupted_model(tmp_path):
+    tiny.start_reference_training()  # in the background, one worker: runs beside the interrupted run
+    cache, model = tmp_path / "cache", tmp_path / "model.npz"
+    cmd = tiny.train_command(cache, model, workers=2)
+
+    run = tiny.Run(cmd, tmp_path / "killed")
+    at_kill = tiny.kill_after(run, cache, at_least=1)
+    assert not model.exists()
+    before = _check_cache_files(cache)
+    ids_before = tiny.file_ids(tiny.cached_files(cache))
+    tiny.Run(cmd, tmp_path / "resumed").wait()
+
+    ref_model, ref_cache, _ = tiny.reference_training()
+    tiny.skip_if_code_changed(cache, ref_cache)
+    ref = _check_cache_files(ref_cache)
+    after = _check_cache_files(cache)
+    assert 1 <= at_kill < len(ref), f"killed with {at_kill} of {len(ref)} trials cached: not in the middle"
+    # every trial once: the same specs (keys) as the uninterrupted run, none lost, none extra
+    assert set(after) == set(ref) and set(before) <= set(after)
+    # the trials finished before the kill were read back, not recomputed (an atomic rewrite changes the inode)
+    assert {k: v for k, v in tiny.file_ids(tiny.cached_files(cache)).items() if k in ids_before} == ids_before
+    # identical outcomes, trial by trial (wall-clock timings aside)
+    for k in ref:
+        a = {f: v for f, v in after[k]["result"].items() if f not in tiny.TRIAL_TIMING_FIELDS}
+        b = {f: v for f, v in ref[k]["result"].items() if f not in tiny.TRIAL_TIMING_FIELDS}
+        assert a == b, k
+    # the model: every array bit for bit, every statistic but the wall-clock ones
+    assert tiny.model_differences(model, ref_model) == []
+    _, header = tiny.model_contents(model)
+    stats = header["meta"]["stats"]
+    assert tiny.trial_count(stats) == len(ref)  # trials counted = specs run: none lost, none counted twice
+    assert sum(p["sampled"] for p in stats["per_instance"].values()) == tiny.TRAIN_SAMPLES * len(tiny.TRAIN_INSTANCES)
+
+
+# ----------------------------------------------------------------------------- kill -9: evaluation
+@pytest.mark.slow
+def test_kill_minus_9_during_evaluation_then_resume_gives_the_uninterrupted_records(tmp_path):
+    from catgrasp_drake.evaluation import TIMING_FIELDS, load_records, load_report
+
+    assert set(TIMING_FIELDS) == {"inference_s", "observe_s", "trial_wall_s"}  # the fields allowed to differ
+    tiny.start_reference_evaluation()
+    out = tiny.prepare_eval_dir(tmp_path / "eval")
+    cmd = tiny.eval_command(out, workers=1)  # one worker: trials in sequence, the kill lands between them
+    at_kill = tiny.kill_after(tiny.Run(cmd, tmp_path / "killed"), tiny.eval_cache(out), at_least=1)
+    assert at_kill == 1 and not tiny.records_path(out).exists()
+    ids_before = tiny.file_ids(tiny.cached_files(tiny.eval_cache(out)))
+    tiny.Run(cmd, tmp_path / "resumed").wait()
+
+    ref_out, _ = tiny.reference_evaluation()
+    tiny.skip_if_code_changed(tiny.eval_cache(out), tiny.eval_cache(ref_out))
+    records, ref_records = load_records(tiny.records_path(out)), load_records(tiny.records_path(ref_out))
+    keys = [(r["instance"], r["view"], r["method"]) for r in records]
+    assert sorted(keys) == sorted((tiny.EVAL_INSTANCE, tiny.EVAL_VIEW, m) for m in tiny.EVAL_METHODS)  # each once
+    assert all(r.get("status") == "ok" for r in records)  # real trials, not errors
+
+    def outcome(r):
+        return {k: v for k, v in r.items() if k not in TIMING_FIELDS}
+
+    assert [outcome(r) for r in records] == [outcome(r) for r in ref_records]
+    assert len(tiny.cached_files(tiny.eval_cache(out))) == len(records)
+    assert {k: v for k, v in tiny.file_ids(tiny.cached_files(tiny.eval_cache(out))).items()
+            if k in ids_before} == ids_before
+    report, ref_report = load_report(out / "drill" / "report.json"), load_report(ref_out / "drill" / "report.json")
+    assert report["table"] == ref_report["table"]
+
+
+# ----------------------------------------------------------------------------- trials that throw inside Drake
+def object_trial(spec: dict) -> dict:
+    """Worker task: the real grasp trial (``run_grasp_trial``) of the hand-written drill grasp on the object
+    in ``spec["model_dir"]``."""
+    from catgrasp_drake.station.handwritten import load_handwritten_motion
+    from catgrasp_drake.station.scenario import load_scenario, with_instance
+    from catgrasp_drake.station.trial import run_grasp_trial
+
+    scenario = with_instance(load_scenario("drill_default"), spec["instance"], model_dir=spec["model_dir"])
+    return run_grasp_trial(scenario, load_handwritten_motion("drill", spec["instance"])).to_dict()
+
+
+def _broken_objects(tmp_path) -> list[dict]:
+    from catgrasp_drake.data.dataset import instance_dir
+
+    meshes = {
+        # a face naming a vertex that does not exist: a failed DRAKE_DEMAND in Drake's triangle mesh,
+        # which pydrake raises as SystemExit
+        "bad_index": "v 0 0 0\nv 0.1 0 0\nv 0 0.1 0\nv 0 0 0.1\nf 1 2 3\nf 1 2 9\n",
+        # no vertices at all: Drake's MakeConvexHull throws RuntimeError
+        "garbage": "this is not a mesh\n",
+    }
+    specs = []
+    for name, text in meshes.items():
+        folder = tmp_path / name
+        shutil.copytree(instance_dir("drill", "drill_03"), folder)
+        (folder / "drill_03.obj").write_text(text)
+        specs.append({"instance": "drill_03", "model_dir": str(folder), "case": name})
+    return specs
+
+
+@pytest.mark.parametrize("workers", [0, 2], ids=["in_process", "worker_processes"])
+def test_a_trial_that_throws_inside_drake_is_a_failed_trial_with_its_reason(tmp_path, workers):
+    specs = _broken_objects(tmp_path)
+    outcomes = run_tasks(object_trial, specs, cache_dir=tmp_path / "cache", code_version="t", workers=workers)
+    assert len(outcomes) == 2  # the run finished
+    for o in outcomes:
+        r = o.result
+        assert r["status"] == "error", r
+        assert r["error"] and "\n" not in r["error"]
+    bad_index, garbage = (o.result["error"] for o in outcomes)
+    assert bad_index.startswith("SystemExit: Failure at") and "condition" in bad_index
+    assert garbage.startswith("RuntimeError:") and "MakeConvexHull" in garbage
+    # a deterministic failure is an outcome like any other: cached, not retried
+    again = run_tasks(object_trial, specs, cache_dir=tmp_path / "cache", code_version="t", workers=workers)
+    assert all(o.cached for o in again) and [o.result for o in again] == [o.result for o in outcomes]
+
+
+def crashing_task(spec: dict) -> dict:
+    """Kills its own worker process when asked to (a segfault or OOM kill, as far as the pool can tell)."""
+    if spec.get("crash"):
+        os.kill(os.getpid(), signal.SIGKILL)
+    return {"y": spec["x"] * 2}
+
+
+def test_a_worker_that_dies_costs_its_own_task_not_the_run(tmp_path):
+    specs = [{"x": 0}, {"x": 1, "crash": True}, {"x": 2}, {"x": 3}, {"x": 4}]
+    out = run_tasks(crashing_task, specs, cache_dir=tmp_path, code_version="v", workers=2)
+    assert [o.result.get("y") for o in out] == [0, None, 4, 6, 8]
+    dead = out[1].result
+    assert dead["status"] == "error" and dead["error"] == \
+        "WorkerDied: the worker process running this task was killed by SIGKILL"
+    # the dead worker's task is not cached (it may have been killed from outside): the next run retries it
+    assert sorted(p.stem for p in tiny.cached_files(tmp_path)) == sorted(o.key for i, o in enumerate(out) if i != 1)
+    # (two uncached tasks: a single one would run in this process -- and kill it)
+    again = run_tasks(crashing_task, specs + [{"x": 5}], cache_dir=tmp_path, code_version="v", workers=2)
+    assert [o.cached for o in again] == [True, False, True, True, True, False] and again[1].result == dead
+
+
+def test_a_task_result_that_cannot_be_stored_is_an_error_not_a_dead_run(tmp_path):
+    out = run_tasks(_unstorable, [{"x": 1}], cache_dir=tmp_path, code_version="v", workers=0)
+    assert out[0].result["status"] == "error" and "JSON serializable" in out[0].result["error"]
+
+
+def _unstorable(spec):
+    return {"value": object()}
+
+
+# ----------------------------------------------------------------------------- corrupt files
+def _square(spec: dict) -> dict:
+    return {"y": spec["x"] ** 2}
+
+
+def test_corrupt_trial_cache_files_are_recomputed(tmp_path):
+    specs = [{"x": i} for i in range(6)]
+    first = run_tasks(_square, specs, cache_dir=tmp_path, code_version="v", workers=0)
+    paths = [tmp_path / f"{o.key}.json" for o in first]
+    paths[0].write_text(paths[0].read_text()[:40])  # truncated
+    paths[1].write_text(paths[1].read_text().replace('"y": 1', '"y": 7'))  # edited: checksum mismatch
+    paths[2].write_text("[1, 2, 3]\n")  # valid JSON, not a cache record
+    paths[3].write_bytes(b"\xff\xfe\x00garbage")  # not UTF-8
+    shutil.copy(paths[5], paths[4])  # another trial's (whole, valid) file under this key
+    again = run_tasks(_square, specs, cache_dir=tmp_path, code_version="v", workers=0)
+    assert [o.cached for o in again] == [False] * 5 + [True]
+    assert [o.result["y"] for o in again] == [i * i for i in range(6)]
+    for p in paths:  # rewritten whole
+        record = json.loads(p.read_text())
+        assert record["format"] == "catgrasp.task_result" and record["format_version"] == 1 and record["sha256"]
+
+
+def test_a_legacy_cache_file_without_checksum_is_still_read(tmp_path):
+    out = run_tasks(_square, [{"x": 3}], cache_dir=tmp_path, code_version="v", workers=0)
+    p = tmp_path / f"{out[0].key}.json"
+    record = json.loads(p.read_text())
+    for k in ("format", "format_version", "sha256"):
+        record.pop(k)
+    p.write_text(json.dumps(record))
+    again = run_tasks(_square, [{"x": 3}], cache_dir=tmp_path, code_version="v", workers=0)
+    assert again[0].cached and again[0].result["y"] == 9
+
+
+_MODEL_CORRUPTIONS = {
+    "truncated": lambda b: b[: len(b) // 2],
+    "empty": lambda b: b"",
+    "not_an_archive": lambda b: b"hello, I am not a model\n" * 10,
+    "bit_flip": lambda b: b[: len(b) // 2] + bytes([b[len(b) // 2] ^ 0x10]) + b[len(b) // 2 + 1:],
+}
+
+
+@pytest.mark.parametrize("corruption", sorted(_MODEL_CORRUPTIONS))
+def test_a_corrupt_model_file_is_a_one_line_error_naming_it(tmp_path, corruption):
+    from catgrasp_drake.category_model import CategoryModel
+
+    path = tmp_path / "drill.npz"
+    path.write_bytes(_MODEL_CORRUPTIONS[corruption]((tiny.REPO / "models/trained/drill.npz").read_bytes()))
+    with pytest.raises(ModelFileError) as e:
+        CategoryModel.load(path)
+    _one_line_naming(str(e.value), path)
+
+
+def test_an_edited_model_fails_its_checksum(tmp_path):
+    import numpy as np
+
+    from catgrasp_drake.category_model import CategoryModel
+
+    arrays, header = tiny.model_contents(tiny.REPO / "models/trained/drill.npz")
+    arrays["regressor/coef"] = arrays["regressor/coef"] + 1e-12
+    header_array = np.frombuffer(json.dumps(header).encode(), np.uint8)
+    path = tmp_path / "edited.npz"
+    np.savez(path, __header__=header_array, **arrays)
+    with pytest.raises(ModelFileError, match="checksum mismatch") as e:
+        CategoryModel.load(path)
+    _one_line_naming(str(e.value), path)
+
+
+def test_a_model_whose_header_is_not_an_object_is_a_clear_error(tmp_path):
+    import numpy as np
+
+    from catgrasp_drake.category_model import CategoryModel
+
+    path = tmp_path / "odd.npz"
+    np.savez(path, __header__=np.frombuffer(b"[1, 2]", np.uint8), a=np.ones(2))
+    with pytest.raises(ModelFileError, match="corrupt header") as e:
+        CategoryModel.load(path)
+    _one_line_naming(str(e.value), path)
+
+
+def test_a_corrupt_fold_model_stops_the_evaluation_with_its_name(tmp_path):
+    from catgrasp_drake.evaluation import EvalConfig, evaluate
+
+    out = tiny.prepare_eval_dir(tmp_path)
+    fold = out / "drill" / f"fold{tiny.EVAL_FOLD}.npz"
+    fold.write_bytes(fold.read_bytes()[:1000])
+    config = EvalConfig(category="drill", methods=("latent",), views=("single",), instances=(tiny.EVAL_INSTANCE,),
+                        workers=0, out_dir=str(out))
+    with pytest.raises(ModelFileError, match="delete it to retrain it") as e:
+        evaluate(config)
+    _one_line_naming(str(e.value), fold)
+    assert not tiny.eval_cache(out).exists()  # stopped before any trial
+
+
+def test_the_cli_reports_a_corrupt_model_in_one_line(tmp_path, capsys):
+    from catgrasp_drake.cli import main
+
+    path = tmp_path / "drill.npz"
+    path.write_bytes(b"\x00" * 100)
+    assert main(["view", "drill", "--model", str(path), "--once"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("catgrasp: error:")
+    _one_line_naming(err, path)
+
+
+def _records():
+    return [{"category": "drill", "fold": 5, "instance": "drill_11", "view": "single", "method": m,
+             "seed": 0, "grasp": m == "latent", "functional": False, "reason": "not_lifted",
+             "confidence": 0.5, "inference_s": 0.2} for m in ("latent", "rigid", "cpd")]
+
+
+_RECORD_CORRUPTIONS = {
+    "truncated": lambda t: t[: len(t) - 40],
+    "edited": lambda t: t.replace('"grasp": true', '"grasp": false'),
+    "record_dropped": lambda t: "".join(t.splitlines(keepends=True)[:-1]),
+    "not_json": lambda t: t.replace("{", "<", 2),
+    "header_of_another_format": lambda t: t.replace("catgrasp.eval_records", "catgrasp.something_else"),
+}
+
+
+@pytest.mark.parametrize("corruption", sorted(_RECORD_CORRUPTIONS))
+def test_corrupt_records_are_a_one_line_error_naming_the_file(tmp_path, corruption):
+    from catgrasp_drake.evaluation import load_records, write_records
+
+    path = tmp_path / "records.jsonl"
+    write_records(path, _records())
+    assert load_records(path) == _records()
+    path.write_text(_RECORD_CORRUPTIONS[corruption](path.read_text()))
+    with pytest.raises(ModelFileError) as e:
+        load_records(path)
+    _one_line_naming(str(e.value), path)
+
+
+def test_records_without_header_and_non_object_lines(tmp_path):
+    from catgrasp_drake.evaluation import load_records
+
+    path = tmp_path / "records.jsonl"
+    path.write_text("".join(json.dumps(r) + "\n" for r in _records()))  # written before the header existed
+    assert load_records(path) == _records()
+    path.write_text(json.dumps(_records()[0]) + "\n[1, 2]\n")
+    with pytest.raises(ModelFileError, match="line 2 is a JSON list") as e:
+        load_records(path)
+    _one_line_naming(str(e.value), path)
+    with pytest.raises(ModelFileError) as e:
+        load_records(tmp_path / "missing.jsonl")
+    _one_line_naming(str(e.value), tmp_path / "missing.jsonl")
+
+
+def test_corrupt_report_is_a_one_line_error_naming_it(tmp_path):
+    from catgrasp_drake.evaluation import load_report, write_report
+
+    path = tmp_path / "report.json"
+    report = {"table": {"latent": {"grasp": {"single": [1, 2]}}}, "wall_s": 1.5, "nan": float("nan")}
+    write_report(path, report)
+    body = load_report(path)
+    assert body["table"] == report["table"] and body["format"] == "catgrasp.eval_report"
+    path.write_text(path.read_text().replace("1.5", "2.5"))
+    with pytest.raises(ModelFileError, match="checksum") as e:
+        load_report(path)
+    _one_line_naming(str(e.value), path)
+    path.write_text(path.read_text()[:30])
+    with pytest.raises(ModelFileError) as e:
+        load_report(path)
+    _one_line_naming(str(e.value), path)
+
+
+def test_the_eval_cache_key_follows_the_model_file(tmp_path):
+    """A retrained (different) fold model never reuses the trials of the old one."""
+    from catgrasp_drake.evaluation import EvalConfig, leave_two_out, trial_specs
+
+    config = EvalConfig(category="drill", methods=("latent",), views=("single",), out_dir=str(tmp_path))
+    a, b = tmp_path / "a.npz", tmp_path / "b.npz"
+    a.write_bytes(b"model one")
+    b.write_bytes(b"model two")
+    folds = leave_two_out("drill")
+    spec_a = trial_specs(config, {k: str(a) for k in range(len(folds))}, folds)[0]
+    shutil.copy(b, a)  # same path, new contents
+    spec_b = trial_specs(config, {k: str(a) for k in range(len(folds))}, folds)[0]
+    assert spec_a["model"] == spec_b["model"] and task_key(spec_a, "v") != task_key(spec_b, "v")
+
