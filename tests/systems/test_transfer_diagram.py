@@ -46,10 +46,6 @@ def test_diagram_runs_as_a_plain_simulation_without_meshcat(drill_model):
     assert td.estimator.GetOutputPort("estimate").Eval(td.estimator.GetMyContextFromRoot(context)) is est
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "known failure, measured: on the default seed the held-out drill is lifted with the index finger on "
-    "the trigger and slips out during the hold; 4/10 held-out placements succeed functionally (README, "
-    "'Grasp transfer diagram'). strict: when it passes, remove this mark"))
 def test_demo_grasps_a_held_out_drill_functionally_from_one_view(tmp_path, capsys):
     _run_demo(tmp_path, capsys)
     record = json.loads((tmp_path / "result.json").read_text())
