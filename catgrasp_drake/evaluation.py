@@ -14,7 +14,7 @@ resumes without redoing finished trials): observe -> predict -> execute
 (:func:`catgrasp_drake.station.trial.run_grasp_trial`, the predicted world
 motion expressed in the true object frame) -> judge. Fold models are trained
 with :func:`catgrasp_drake.training.train_category` and kept under the output
-folder (re-used when present).
+folder (re-used when present), their grasp trials cached in ``<out_dir>/training_trials``.
 
 Outputs (``evaluate``): per-trial records (JSON lines), Table I per method next
 to the paper's figures (also as a PNG chart), inference times, and the confidence analysis (AUROC of
@@ -144,8 +144,11 @@ def fold_model(config: EvalConfig, fold: int, train: list[str], progress=None) -
         except (ModelFileError, InputError) as e:
             raise ModelFileError(f"{str(e).splitlines()[0]} (fold {fold} model; delete it to retrain it)") from None
         return path
+    # the fold models' grasp trials are cached under out_dir too (shared by the folds and categories), so
+    # an interrupted evaluation resumes from the same folder whatever the working directory
     tc = TrainingConfig(samples_per_instance=config.samples_per_instance, seed=config.seed,
-                        workers=config.workers, canonical_instance=train[0], ray=config.ray)
+                        workers=config.workers, canonical_instance=train[0], ray=config.ray,
+                        cache_dir=str(Path(config.out_dir) / "training_trials"))
     train_category(config.category, train, tc, progress=progress).save(path)
     return path
 

@@ -74,7 +74,7 @@ class TrainingConfig:
     beta: float | None = 0.10
     lam: float | None = None
     variance: float = 0.95
-    # leave-one-instance-out on the drills: 12.7 mm (1.0) vs 28.4 mm (0.01) at the functional point
+    # leave-one-instance-out on the drills: 13.0 mm (1.0) vs 26.6 mm (0.01) at the functional point
     # (benchmarks/bench_grasp_warp.py)
     ridge_alpha: float = 1.0
     grasp_rotation_radius: float = 0.05  # m; see CategoryModel.grasp_rotation_radius
