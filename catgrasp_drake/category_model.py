@@ -30,6 +30,7 @@ from catgrasp_drake.core.deformation import warp_poses
 from catgrasp_drake.core.fileio import load_arrays, save_arrays
 from catgrasp_drake.core.regression import LinearRegressor
 from catgrasp_drake.core.shape_space import ShapeSpace
+from catgrasp_drake.core.validation import positive, real_array, vector3
 from catgrasp_drake.errors import InputError, ModelFileError
 from catgrasp_drake.grasping.descriptor import descriptor_size, motion_from_descriptor
 from catgrasp_drake.grasping.motion import GraspMotion
@@ -46,6 +47,16 @@ def similarity_matrix(R, t, s: float = 1.0) -> np.ndarray:
     return S
 
 
+def check_similarity(R, t, s):
+    """``(R, t, s)`` of a similarity checked: a proper 3x3 rotation, a finite translation (m), a scale > 0."""
+    R = real_array(R, "R", "3x3 rotation matrix")
+    if R.shape != (3, 3) or not np.all(np.isfinite(R)):
+        raise InputError(f"R: expected a finite 3x3 rotation matrix, got shape {R.shape}")
+    if np.abs(R.T @ R - np.eye(3)).max() > 1e-6 or np.linalg.det(R) < 0:
+        raise InputError("R: not a proper rotation matrix (R^T R != I or det < 0); orthonormalise it first")
+    return R, vector3(t, "t"), positive(s, "s")
+
+
 def apply_similarity_to_poses(poses: np.ndarray, R, t, s: float = 1.0, anchor=None) -> np.ndarray:
     """Poses (K, 4, 4) of a rigid body moved by the similarity p -> s R p + t of the object.
 
@@ -55,8 +66,8 @@ def apply_similarity_to_poses(poses: np.ndarray, R, t, s: float = 1.0, anchor=No
     anchor.
     """
     out = np.array(poses, dtype=float, copy=True)
-    R = np.asarray(R, float)
-    anc = np.zeros(3) if anchor is None else np.asarray(anchor, float)
+    R, t, s = check_similarity(R, t, s)
+    anc = np.zeros(3) if anchor is None else vector3(anchor, "anchor")
     a = out[:, :3, 3] + out[:, :3, :3] @ anc
     out[:, :3, :3] = R @ out[:, :3, :3]
     out[:, :3, 3] = float(s) * a @ R.T + np.asarray(t, float) - out[:, :3, :3] @ anc
@@ -103,6 +114,16 @@ class CategoryModel:
             raise InputError(f"grasp_rotation_radius: expected > 0 m or None, got {self.grasp_rotation_radius!r}")
         if len(self.instances) != len(self.space.latent_train):
             raise InputError("instances and the shape space's training vectors differ in number")
+        training = (self.training_latent, self.training_descriptors, self.training_groups)
+        if any(a is not None for a in training):
+            if any(a is None for a in training):
+                raise InputError("training set: latent vectors, descriptors and groups must be given together")
+            L, Dd, g = (np.asarray(a) for a in training)
+            n = len(L)
+            if (L.shape != (n, self.space.q) or Dd.shape != (n, D) or g.shape != (n,)
+                    or not np.all(np.isfinite(L)) or not np.all(np.isfinite(Dd))):
+                raise InputError(f"training set: expected latent (n, {self.space.q}), descriptors (n, {D}) and "
+                                 f"groups (n,) of finite numbers, got {L.shape}, {Dd.shape}, {g.shape}")
 
     def refit(self, alpha: float) -> "CategoryModel":
         """The same model with the regressor re-fitted on its stored training set with ridge ``alpha``."""
@@ -144,6 +165,7 @@ class CategoryModel:
         observation frame (the latent fit's rigid part); the returned motion
         is in that frame (``frame`` names it, "world" by default).
         """
+        R, t, s = check_similarity(R, t, s)
         m = self.warped_motion(x)
         poses = apply_similarity_to_poses(m.poses, R, t, s, anchor=self.grasp_anchor_H)
         return GraspMotion(poses, m.pose_names, dict(m.postures), frame, m.lift_height, m.hold_time)
@@ -176,11 +198,22 @@ class CategoryModel:
     def load(cls, path: str | os.PathLike, *, category: str | None = None) -> "CategoryModel":
         """Read a model file; ModelFileError if corrupt/mismatched, InputError if of another category."""
         arrays, meta = load_arrays(path, kind=FILE_KIND, version=FILE_VERSION)
+        if not isinstance(meta, dict):
+            raise ModelFileError(f"{path}: category model header is not a JSON object")
+        names = (meta.get("category"), meta.get("canonical_instance"))
+        if not all(isinstance(n, str) and n for n in names) or not (
+                isinstance(meta.get("instances"), list) and all(isinstance(n, str) for n in meta["instances"])):
+            raise ModelFileError(f"{path}: category model header lacks its category or instance names")
         try:
             space = ShapeSpace.from_arrays({k[6:]: v for k, v in arrays.items() if k.startswith("shape/")},
                                            meta["shape"], source=str(path))
-            regressor = LinearRegressor(arrays["regressor/coef"], arrays["regressor/intercept"],
-                                        float(meta["regressor_alpha"]))
+            coef = np.asarray(arrays["regressor/coef"], dtype=np.float64)
+            intercept = np.asarray(arrays["regressor/intercept"], dtype=np.float64)
+            alpha = float(meta["regressor_alpha"])
+            if (coef.ndim != 2 or intercept.shape != coef.shape[:1] or not np.all(np.isfinite(coef))
+                    or not np.all(np.isfinite(intercept)) or not (np.isfinite(alpha) and alpha >= 0)):
+                raise ModelFileError(f"{path}: the grasp regressor's arrays are inconsistent or not finite")
+            regressor = LinearRegressor(coef, intercept, alpha)
             model = cls(
                 category=str(meta["category"]),
                 space=space,
@@ -198,7 +231,7 @@ class CategoryModel:
                 training_descriptors=arrays.get("training/descriptors"),
                 training_groups=arrays.get("training/groups"),
             )
-        except (KeyError, TypeError, ValueError) as e:
+        except (KeyError, TypeError, ValueError, AttributeError) as e:
             raise ModelFileError(f"{path}: incomplete or inconsistent category model ({e})") from None
         if category is not None and model.category != category:
             raise InputError(f"{path}: is a {model.category!r} model, not {category!r}")

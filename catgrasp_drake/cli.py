@@ -6,12 +6,67 @@ Progress and results are printed here, never inside the library.
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 import tempfile
 import time
 from pathlib import Path
 
 from catgrasp_drake.errors import CatgraspError, InputError
+
+
+# ----------------------------------------------------------------------------- argument checks
+# Bad arguments are refused before any work starts, each with one line naming it.
+
+
+#: Upper bounds that catch typos before hours of simulation (a seed must fit 32 bits).
+MAX_SEED, MAX_SAMPLES, MAX_WORKERS = 2**32 - 1, 10_000, 1024
+
+
+def _int_at_least(low: int, high: int | None = None):
+    what = f"an integer >= {low}" if high is None else f"an integer in [{low}, {high}]"
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected {what}, got {text!r}") from None
+        if value < low or (high is not None and value > high):
+            raise argparse.ArgumentTypeError(f"expected {what}, got {value}")
+        return value
+
+    parse.__name__ = "integer"
+    return parse
+
+
+def _float_in(low: float, high: float | None = None, *, open_low: bool = False):
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            value = math.nan
+        ok = math.isfinite(value) and (value > low if open_low else value >= low) and (high is None or value <= high)
+        if not ok:
+            rng = (f"> {low:g}" if open_low else f">= {low:g}") if high is None else f"in [{low:g}, {high:g}]"
+            raise argparse.ArgumentTypeError(f"expected a finite number {rng}, got {text!r}")
+        return value
+
+    parse.__name__ = "number"
+    return parse
+
+
+def _check_category(category: str) -> list[str]:
+    """The category's instance names, or InputError naming the known categories."""
+    from catgrasp_drake.data.dataset import list_instances
+
+    return list_instances(category)
+
+
+def _check_instances(category: str, instances, what: str = "--instances") -> None:
+    names = _check_category(category)
+    unknown = [n for n in instances or () if n not in names]
+    if unknown:
+        raise InputError(f"{what}: unknown {category} instance(s) {unknown}; known: {', '.join(names)}")
 
 
 def _cmd_generate_data(args) -> int:
@@ -37,6 +92,8 @@ def _cmd_generate_data(args) -> int:
 def _cmd_contact_sheet(args) -> int:
     from catgrasp_drake.viz.sheets import dataset_contact_sheet
 
+    for category in args.categories or ():
+        _check_category(category)
     t0 = time.perf_counter()
     dataset_contact_sheet(args.out, categories=args.categories)
     print(f"wrote {args.out} in {time.perf_counter() - t0:.1f} s")
@@ -47,6 +104,7 @@ def _cmd_clouds(args) -> int:
     from catgrasp_drake.data.cloud_io import write_point_cloud
     from catgrasp_drake.data.dataset import instance_clouds, list_instances
 
+    _check_category(args.category)
     out = Path(args.out)
     names = list_instances(args.category)
     for name, cloud in zip(names, instance_clouds(args.category, names, args.voxel)):
@@ -83,6 +141,13 @@ def _cmd_train(args) -> int:
     from catgrasp_drake.grasping.sampling import SamplingParams
     from catgrasp_drake.training import TrainingConfig, train_category
 
+    _check_instances(args.category, args.instances)
+    if args.instances and len(args.instances) < 2:
+        raise InputError(f"--instances: training needs at least 2 instances, got {len(args.instances)}")
+    if args.canonical is not None:
+        _check_instances(args.category, [args.canonical], "--canonical")
+        if args.instances and args.canonical not in args.instances:
+            raise InputError(f"--canonical: {args.canonical!r} is not among --instances")
     config = TrainingConfig(samples_per_instance=args.samples, seed=args.seed, workers=args.workers,
                             canonical_instance=args.canonical, cache_dir=args.cache, ray=args.ray,
                             sampling=SamplingParams())
@@ -94,6 +159,8 @@ def _cmd_train(args) -> int:
         if not 0 <= args.hold_out <= len(names) - 2:
             raise InputError(f"--hold-out: expected 0..{len(names) - 2} for {len(names)} instances, got {args.hold_out}")
         instances = names[:len(names) - args.hold_out]
+        if args.canonical is not None and args.canonical not in instances:
+            raise InputError(f"--canonical: {args.canonical!r} is held out; lower --hold-out or pick another")
         if args.hold_out:
             print(f"held out (never trained on; the demo's novel instances): {', '.join(names[len(instances):])}")
     print(f"training {args.category} on {len(instances)} instances: {args.samples} sampled motions per instance, "
@@ -117,8 +184,15 @@ def _cmd_train(args) -> int:
 
 
 def _cmd_evaluate(args) -> int:
-    from catgrasp_drake.evaluation import EvalConfig, format_table, evaluate
+    from catgrasp_drake.evaluation import EvalConfig, format_table, evaluate, leave_two_out
 
+    _check_instances(args.category, args.instances)
+    folds = leave_two_out(args.category, args.folds)  # InputError for a bad --folds
+    if args.instances:
+        tested = {n for _, test in folds for n in test}
+        if not set(args.instances) & tested:
+            raise InputError(f"--instances: {args.instances} are not test instances of any fold; "
+                             f"test instances: {', '.join(sorted(tested))}")
     config = EvalConfig(category=args.category, methods=tuple(args.methods), views=tuple(args.views),
                         seed=args.seed, folds=args.folds, instances=tuple(args.instances) if args.instances else None,
                         samples_per_instance=args.samples, workers=args.workers, out_dir=args.out, ray=args.ray)
@@ -182,7 +256,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     g = sub.add_parser("generate-data", help="regenerate the embedded object data set from its seed")
     g.add_argument("--out", help="output directory (default: the repository's models/objects)")
-    g.add_argument("--seed", type=int, default=2018)
+    g.add_argument("--seed", type=_int_at_least(0, MAX_SEED), default=2018)
     g.add_argument("--check", action="store_true", help="only verify the committed data set byte for byte")
     g.set_defaults(func=_cmd_generate_data)
 
@@ -194,19 +268,20 @@ def build_parser() -> argparse.ArgumentParser:
     k = sub.add_parser("clouds", help="full (ray-cast + voxel grid) clouds of a category's instances")
     k.add_argument("category")
     k.add_argument("--out", default="out/clouds")
-    k.add_argument("--voxel", type=float, default=0.01)
+    k.add_argument("--voxel", type=_float_in(0.0, open_low=True), default=0.01)
     k.add_argument("--format", choices=("npy", "pcd", "ply"), default="pcd")
     k.set_defaults(func=_cmd_clouds)
 
     t = sub.add_parser("train", help="build a category model (shape space + grasp regressor) by simulated trials")
     t.add_argument("category")
     t.add_argument("--instances", nargs="+", help="training instances (default: all embedded ones but --hold-out)")
-    t.add_argument("--hold-out", type=int, default=2,
+    t.add_argument("--hold-out", type=_int_at_least(0), default=2,
                    help="leave the category's last N instances out of training (default 2: the demo's novel ones)")
     t.add_argument("--canonical", help="canonical instance (default: the first training instance)")
-    t.add_argument("--samples", type=int, default=12, help="sampled motions per instance")
-    t.add_argument("--seed", type=int, default=0)
-    t.add_argument("--workers", type=int, default=None, help="worker processes (default: all cores)")
+    t.add_argument("--samples", type=_int_at_least(1, MAX_SAMPLES), default=12, help="sampled motions per instance")
+    t.add_argument("--seed", type=_int_at_least(0, MAX_SEED), default=0)
+    t.add_argument("--workers", type=_int_at_least(0, MAX_WORKERS), default=None,
+                   help="worker processes (default: all cores; 0: in this process)")
     t.add_argument("--cache", default="out/trial_cache", help="trial cache directory (resumes interrupted runs)")
     t.add_argument("--out", help="model file (default: models/trained/<category>.npz)")
     t.add_argument("--ray", default=None,
@@ -218,11 +293,14 @@ def build_parser() -> argparse.ArgumentParser:
     e.add_argument("--methods", nargs="+", default=["latent", "rigid", "cpd", "nearest"],
                    choices=["latent", "rigid", "cpd", "nearest"])
     e.add_argument("--views", nargs="+", default=["full", "single"], choices=["full", "single"])
-    e.add_argument("--seed", type=int, default=0, help="seed of every test object's placement")
-    e.add_argument("--folds", type=int, default=None, help="number of leave-two-out folds (default: the paper's)")
+    e.add_argument("--seed", type=_int_at_least(0, MAX_SEED), default=0, help="seed of every test object's placement")
+    e.add_argument("--folds", type=_int_at_least(1), default=None,
+                   help="number of leave-two-out folds (default: the paper's)")
     e.add_argument("--instances", nargs="+", help="only these test instances (their folds' models only)")
-    e.add_argument("--samples", type=int, default=12, help="sampled motions per instance when training fold models")
-    e.add_argument("--workers", type=int, default=None, help="worker processes (default: all cores)")
+    e.add_argument("--samples", type=_int_at_least(1, MAX_SAMPLES), default=12,
+                   help="sampled motions per instance when training fold models")
+    e.add_argument("--workers", type=_int_at_least(0, MAX_WORKERS), default=None,
+                   help="worker processes (default: all cores; 0: in this process)")
     e.add_argument("--out", default="out/eval", help="output folder (fold models, trial cache, records, report)")
     e.add_argument("--ray", default=None,
                    help="run trials on a Ray cluster: 'auto', 'local' or the head's address (extra .[cluster])")
@@ -231,11 +309,11 @@ def build_parser() -> argparse.ArgumentParser:
     d = sub.add_parser("demo", help="the main job on the embedded default data")
     d.add_argument("--category", default="drill", help="drill, spray_bottle or mug")
     d.add_argument("--instance", default=None, help="object instance (default: the last one the model never saw)")
-    d.add_argument("--seed", type=int, default=0, help="seed of the object's random placement")
+    d.add_argument("--seed", type=_int_at_least(0, MAX_SEED), default=0, help="seed of the object's random placement")
     d.add_argument("--view", choices=("single", "full"), default="single",
                    help="one depth camera, or four around the object")
     d.add_argument("--model", help="category model file (default: models/trained/<category>.npz)")
-    d.add_argument("--min-confidence", type=float, default=0.0,
+    d.add_argument("--min-confidence", type=_float_in(0.0, 1.0), default=0.0,
                    help="refuse the grasp below this estimate confidence (0..1)")
     d.add_argument("--no-meshcat", action="store_true", help="no Meshcat server and no HTML recording")
     d.add_argument("--out", default="out/demo")
@@ -250,13 +328,21 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
+def _one_line(e: BaseException) -> str:
+    lines = str(e).strip().splitlines()
+    return lines[0] if lines else type(e).__name__
+
+
 def main(argv=None) -> int:
     args = build_parser().parse_args(argv)
     try:
         return int(args.func(args) or 0)
     except CatgraspError as e:
-        print(f"catgrasp: error: {e}", file=sys.stderr)
+        print(f"catgrasp: error: {_one_line(e)}", file=sys.stderr)
         return 2
+    except (OSError, ImportError) as e:  # a file system problem, a missing optional library: no traceback
+        print(f"catgrasp: error: {type(e).__name__}: {_one_line(e)}", file=sys.stderr)
+        return 1
     except KeyboardInterrupt:
         print("catgrasp: interrupted", file=sys.stderr)
         return 130

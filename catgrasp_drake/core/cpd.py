@@ -64,7 +64,7 @@ from typing import Callable
 import numpy as np
 import scipy.linalg
 
-from catgrasp_drake.core.validation import as_points, outlier_weight, positive
+from catgrasp_drake.core.validation import as_points, count, non_negative, outlier_weight, positive
 from catgrasp_drake.errors import InputError
 
 #: Kernel width (m) used by the project's defaults (tuned on the real drills).
@@ -75,6 +75,10 @@ DEFAULT_LAMBDA = 3.0
 PAPER_BETA, PAPER_LAMBDA, PAPER_SIGMA2 = 1.0, 3.0, 0.01
 #: Floor of sigma2 in normalised units (keeps exact-fit problems finite).
 SIGMA2_FLOOR = 1e-10
+#: Most source points of the exact kernel (M x M doubles: 3.2 GB, O(M^3) per iteration) and of the
+#: low-rank one (O(M^2) kernel evaluations per product).
+MAX_SOURCE_EXACT = 20_000
+MAX_SOURCE_LOW_RANK = 200_000
 #: Kernel trace fraction kept by ``low_rank="auto"``.
 AUTO_RANK_TRACE = 1.0 - 1e-4
 
@@ -141,17 +145,40 @@ class RigidCPDResult:
 
 def gaussian_kernel(A, B, beta) -> np.ndarray:
     """``G[i, j] = exp(-|a_i - b_j|^2 / (2 beta^2))`` for (K, D) ``A`` and (L, D) ``B``."""
-    A = np.asarray(A, dtype=np.float64)
-    B = np.asarray(B, dtype=np.float64)
-    if A.ndim != 2 or B.ndim != 2 or A.shape[1] != B.shape[1]:
+    A = _kernel_points(A, "A")
+    B = _kernel_points(B, "B")
+    if A.shape[1] != B.shape[1]:
         raise InputError(f"gaussian_kernel: expected (K, D) and (L, D) arrays, got {A.shape} and {B.shape}")
-    beta = positive(beta, "beta")
+    beta = kernel_width(beta)
     d2 = _sqdist(A, B)
     d2 *= -0.5 / (beta * beta)
     np.maximum(d2, -700.0, out=d2)
     np.exp(d2, out=d2)
     d2[d2 < 1e-150] = 0.0  # no subnormals downstream (they slow BLAS/LAPACK ~10x)
     return d2
+
+
+def kernel_width(beta, name: str = "beta") -> float:
+    """``beta`` checked to be a positive width whose square neither underflows nor overflows."""
+    beta = positive(beta, name)
+    if not (1e-150 < beta < 1e150):
+        raise InputError(f"{name}: kernel width {beta:g} is out of the usable range (1e-150, 1e150)")
+    return beta
+
+
+def _kernel_points(A, name: str) -> np.ndarray:
+    try:
+        A = np.asarray(A)
+        if A.dtype.kind not in "iufO":
+            raise TypeError
+        A = A.astype(np.float64, copy=False)
+    except (TypeError, ValueError):
+        raise InputError(f"gaussian_kernel: {name} must be a numeric (K, D) array of real numbers") from None
+    if A.ndim != 2:
+        raise InputError(f"gaussian_kernel: {name} must be a (K, D) array, got shape {A.shape}")
+    if not np.all(np.isfinite(A)) or (A.size and float(np.abs(A).max()) > 1e100):
+        raise InputError(f"gaussian_kernel: {name} contains NaN, inf or coordinates beyond 1e100")
+    return A
 
 
 def _sqdist(A: np.ndarray, B: np.ndarray) -> np.ndarray:
@@ -293,7 +320,7 @@ def _estep_block(Ya, Ysc, X, Xa, sigma2, log_c, lo, hi):
     np.maximum(E, _EXP_CLAMP, out=E)
     np.exp(E, out=E)
     s = E.sum(axis=0)
-    c = math.exp(log_c) if log_c > -700.0 else 0.0
+    c = math.exp(min(log_c, 700.0)) if log_c > -700.0 else 0.0  # (a huge given sigma2: no overflow)
     den = s + c
     bad = s < math.exp(_BAD_LOGSUM)
     with np.errstate(divide="ignore"):
@@ -383,15 +410,22 @@ def _sigma2_update(X, T, e: EStep) -> float:
     return (xPx - 2.0 * trPXT + tPt) / (e.Np * D)
 
 
+#: Clouds whose centroids are more than this many (larger) RMS radii apart are "far apart".
+FAR_APART = 10.0
+
+
+def _far_apart(Y: np.ndarray, X: np.ndarray) -> bool:
+    radius = max(float(np.sqrt(((P - P.mean(0)) ** 2).sum(1).mean())) for P in (Y, X))
+    return float(np.linalg.norm(X.mean(0) - Y.mean(0))) > FAR_APART * max(radius, 1e-300)
+
+
 def _check_common(source, target, w, max_iter, tol):
     Y = as_points(source, "source", min_points=3)
     X = as_points(target, "target", min_points=3)
     w = outlier_weight(w)
-    if int(max_iter) < 1:
-        raise InputError(f"max_iter: must be >= 1, got {max_iter}")
-    if not (float(tol) >= 0.0):
-        raise InputError(f"tol: must be >= 0, got {tol}")
-    return Y, X, w, int(max_iter), float(tol)
+    max_iter = count(max_iter, "max_iter", 1)
+    tol = non_negative(tol, "tol")
+    return Y, X, w, max_iter, tol
 
 
 # --------------------------------------------------------------------------- low-rank kernel
@@ -486,13 +520,21 @@ def _exact_mstep(G, P1, B, lam_s2):
     if len(I) == 0:
         return W
     sq = np.sqrt(P1[I])
-    A = G[np.ix_(I, I)] if len(I) < len(P1) else G.copy()
-    A *= sq[:, None]
-    A *= sq[None, :]
-    A[np.diag_indices(len(I))] += lam_s2
+
+    def system():
+        A = G[np.ix_(I, I)] if len(I) < len(P1) else G.copy()
+        A *= sq[:, None]
+        A *= sq[None, :]
+        A[np.diag_indices(len(I))] += lam_s2
+        return A
+
     rhs = B[I] / sq[:, None]
-    c = scipy.linalg.cho_factor(A, lower=True, overwrite_a=True, check_finite=False)
-    W[I] = sq[:, None] * scipy.linalg.cho_solve(c, rhs, overwrite_b=True, check_finite=False)
+    try:
+        c = scipy.linalg.cho_factor(system(), lower=True, overwrite_a=True, check_finite=False)
+        U = scipy.linalg.cho_solve(c, rhs, overwrite_b=False, check_finite=False)
+    except np.linalg.LinAlgError:  # numerically not positive definite (tiny lam * sigma2, duplicate points)
+        U = scipy.linalg.lstsq(system(), rhs, check_finite=False)[0]
+    W[I] = sq[:, None] * U
     return W
 
 
@@ -520,8 +562,16 @@ def nonrigid_cpd(
     Y, X, w, max_iter, tol = _check_common(source, target, w, max_iter, tol)
     if Y.shape[1] != X.shape[1]:
         raise InputError(f"source and target dimensions differ: {Y.shape[1]} vs {X.shape[1]}")
-    beta = positive(beta, "beta")
+    beta = kernel_width(beta)
     lam = positive(lam, "lam")
+    limit = MAX_SOURCE_EXACT if low_rank is None else MAX_SOURCE_LOW_RANK
+    if len(Y) > limit:
+        fix = "pass low_rank='auto' or voxel_downsample the source" if low_rank is None else "voxel_downsample it"
+        raise InputError(f"source: {len(Y)} points; the {'exact' if low_rank is None else 'low-rank'} kernel handles "
+                         f"at most {limit} ({fix})")
+    if _far_apart(Y, X):
+        raise InputError(f"source and target are {float(np.linalg.norm(X.mean(0) - Y.mean(0))):.3g} m apart, over "
+                         f"{FAR_APART:g}x their size: non-rigid CPD needs them roughly aligned; run rigid_cpd first")
     center, scale = joint_normalization(Y, X)
     Yn = (Y - center) / scale
     Xn = (X - center) / scale
@@ -570,7 +620,10 @@ def nonrigid_cpd(
                 QtDQ = Q.T @ (e.P1[:, None] * Q)
                 A = QtDQ * lam_k[None, :]
                 A[np.diag_indices(rank)] += lam * s2
-                Z = np.linalg.solve(A, Q.T @ B)
+                try:
+                    Z = np.linalg.solve(A, Q.T @ B)
+                except np.linalg.LinAlgError:
+                    Z = np.linalg.lstsq(A, Q.T @ B, rcond=None)[0]
                 LZ = lam_k[:, None] * Z
                 V = Q @ LZ
                 reg = float((Z * LZ).sum())
@@ -649,6 +702,12 @@ def rigid_cpd(
     Y, X, w, max_iter, tol = _check_common(source, target, w, max_iter, tol)
     if Y.shape[1] != X.shape[1]:
         raise InputError(f"source and target dimensions differ: {Y.shape[1]} vs {X.shape[1]}")
+    shift = np.zeros(Y.shape[1])
+    if _far_apart(Y, X):
+        # clouds far apart relative to their size (e.g. 1 km): from the identity every posterior is uniform and
+        # the scale collapses to 0 for good; register the centroid-aligned source, then compose the shift
+        shift = X.mean(axis=0) - Y.mean(axis=0)
+        Y = Y + shift
     center, sc = joint_normalization(Y, X)
     Yn = (Y - center) / sc
     Xn = (X - center) / sc
@@ -681,7 +740,7 @@ def rigid_cpd(
         if s2 <= SIGMA2_FLOOR:
             converged = True
             break
-    t_metric = center + sc * t - s * R @ center
+    t_metric = center + sc * t - s * R @ center + s * R @ shift
     return RigidCPDResult(
         R=R,
         t=t_metric,

@@ -35,9 +35,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from catgrasp_drake.core.cpd import _sqdist, gaussian_kernel
+from catgrasp_drake.core.cpd import _sqdist, gaussian_kernel, kernel_width
 from catgrasp_drake.core.rotations import orthonormalize
-from catgrasp_drake.core.validation import as_points, positive
+from catgrasp_drake.core.validation import MAX_COORDINATE_M, as_points, count, non_negative, real_array
 from catgrasp_drake.errors import InputError
 
 _CHUNK = 1024
@@ -45,12 +45,15 @@ _CHUNK = 1024
 
 def _check_field(canonical, W, beta):
     C = as_points(canonical, "canonical", min_points=1)
-    W = np.asarray(W, dtype=np.float64)
+    W = real_array(W, "W", "(M, 3) array")
     if W.shape != C.shape:
         raise InputError(f"W: expected shape {C.shape} (one 3-vector per canonical point), got {W.shape}")
     if not np.all(np.isfinite(W)):
         raise InputError("W: contains NaN or inf")
-    return C, W, positive(beta, "beta")
+    if float(np.abs(W).max()) > MAX_COORDINATE_M:
+        raise InputError(f"W: kernel weights reach {float(np.abs(W).max()):.3g} m; "
+                         f"expected metres (<= {MAX_COORDINATE_M:g})")
+    return C, W, kernel_width(beta)
 
 
 def displacement(canonical, W, beta, points) -> np.ndarray:
@@ -103,6 +106,10 @@ def inverse_deform_points(
     """
     C, W, beta = _check_field(canonical, W, beta)
     O = as_points(points, "points", min_points=0)
+    tol = non_negative(tol, "tol")
+    max_iter = count(max_iter, "max_iter", 0)
+    if not isinstance(refine, (bool, np.bool_)):
+        raise InputError(f"refine: expected True or False, got {refine!r}")
     if len(O) == 0:
         return (O.copy(), np.zeros(0)) if return_residual else O.copy()
     V = gaussian_kernel(C, C, beta) @ W  # v(z_i) at the canonical points
@@ -116,7 +123,7 @@ def inverse_deform_points(
     res = deform_points(C, W, beta, p) - O
     rn = np.linalg.norm(res, axis=1)
     if refine:
-        for _ in range(int(max_iter)):
+        for _ in range(max_iter):
             todo = rn > tol
             if not np.any(todo):
                 break
@@ -147,7 +154,7 @@ def inverse_deform_points(
 
 
 def _check_poses(X) -> tuple[np.ndarray, bool]:
-    X = np.asarray(X, dtype=np.float64)
+    X = real_array(X, "poses", "(4, 4) or (K, 4, 4) array")
     single = X.ndim == 2
     if single:
         X = X[None]
@@ -155,14 +162,17 @@ def _check_poses(X) -> tuple[np.ndarray, bool]:
         raise InputError(f"poses: expected (4, 4) or (K, 4, 4) homogeneous matrices, got {X.shape}")
     if not np.all(np.isfinite(X)):
         raise InputError("poses: contain NaN or inf")
+    if X.size and float(np.abs(X[:, :3, 3]).max()) > MAX_COORDINATE_M:
+        raise InputError(f"poses: translations reach {float(np.abs(X[:, :3, 3]).max()):.3g}; expected metres "
+                         f"within {MAX_COORDINATE_M:g} m of the origin")
     return X, single
 
 
 def _check_anchor(anchor) -> np.ndarray:
     if anchor is None:
         return np.zeros(3)
-    a = np.asarray(anchor, dtype=np.float64).reshape(-1)
-    if a.shape != (3,) or not np.all(np.isfinite(a)):
+    a = real_array(anchor, "anchor", "3-vector").reshape(-1)
+    if a.shape != (3,) or not np.all(np.isfinite(a)) or float(np.abs(a).max()) > MAX_COORDINATE_M:
         raise InputError(f"anchor: expected a finite 3-vector (m, in the pose's own frame), got {np.shape(anchor)}")
     return a
 
@@ -177,7 +187,7 @@ def local_rotations(canonical, W, beta, points, radius: float) -> np.ndarray:
     """
     C, W, beta = _check_field(canonical, W, beta)
     P = as_points(points, "points", min_points=0)
-    radius = positive(radius, "radius")
+    radius = kernel_width(radius, "rotation_radius")
     D = deform_points(C, W, beta, C)
     out = np.empty((len(P), 3, 3))
     for k, p in enumerate(P):
@@ -223,7 +233,7 @@ def warp_poses(canonical, W, beta, X, *, eps: float | None = None, anchor=None,
     elif eps is None:
         A = jacobian(C, W, beta, p) @ R
     else:
-        eps = positive(eps, "eps")
+        eps = kernel_width(eps, "eps")
         ends = (p[:, None, :] + eps * np.swapaxes(R, 1, 2)).reshape(-1, 3)  # p + eps * column i
         fe = deform_points(C, W, beta, ends).reshape(-1, 3, 3)
         A = np.swapaxes((fe - fp[:, None, :]) / eps, 1, 2)

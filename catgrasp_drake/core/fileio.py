@@ -29,7 +29,10 @@ _HEADER_KEY = "__header__"
 
 def _one_line(e: BaseException) -> str:
     text = str(e).strip()
-    return f"{type(e).__name__}: {text.splitlines()[0]}" if text else type(e).__name__
+    first = text.splitlines()[0] if text else ""
+    if len(first) > 160:  # e.g. zipfile quoting raw header bytes
+        first = first[:157] + "..."
+    return f"{type(e).__name__}: {first}" if first else type(e).__name__
 
 
 def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> None:
@@ -106,7 +109,9 @@ def load_arrays(
     Raises :class:`ModelFileError` with a one-line message if the file is
     missing, not an archive, of another kind or version, or fails its checksum.
     """
-    path = Path(path)
+    if not isinstance(path, (str, bytes, os.PathLike)):
+        raise ModelFileError(f"expected a model file name, got {type(path).__name__}")
+    path = Path(os.fsdecode(path))
     if not path.is_file():
         raise ModelFileError(f"{path}: file not found")
     try:

@@ -62,6 +62,7 @@ from catgrasp_drake.core.cpd import (
     _sigma2_update,
     estep,
     initial_sigma2,
+    kernel_width,
     nonrigid_cpd,
     single_threaded_blas,
     weighted_procrustes,
@@ -69,11 +70,22 @@ from catgrasp_drake.core.cpd import (
 from catgrasp_drake.core.deformation import deform_points, warp_poses
 from catgrasp_drake.core.rotations import orthonormalize, rotz
 from catgrasp_drake.core.shape_space import ShapeSpace
-from catgrasp_drake.core.validation import as_points, outlier_weight, positive
-from catgrasp_drake.core.visibility import DEFAULT_RADIUS_FACTOR, hidden_point_removal
+from catgrasp_drake.core.validation import (
+    as_points,
+    count,
+    non_negative,
+    outlier_weight,
+    positive,
+    real_array,
+    real_number,
+    vector3,
+)
+from catgrasp_drake.core.visibility import DEFAULT_RADIUS_FACTOR, MAX_RADIUS_FACTOR, hidden_point_removal
 from catgrasp_drake.errors import InputError
 
 SIGMA2_MIN_M2 = 1e-8  # (0.1 mm)^2
+#: Most yaw starts of the search (one per 1 degree).
+MAX_YAW_CANDIDATES = 360
 
 
 @dataclass(frozen=True, eq=False)
@@ -257,32 +269,37 @@ def _parse_initial_pose(initial_pose):
         return np.eye(3), None, 1.0
     if isinstance(initial_pose, tuple) and len(initial_pose) == 3:
         R, t, s = initial_pose
-        R = orthonormalize(np.asarray(R, dtype=float))
-        t = np.asarray(t, dtype=float).reshape(3)
+        R = real_array(R, "initial_pose: R", "3x3 rotation")
+        if R.shape != (3, 3):
+            raise InputError(f"initial_pose: R must be a 3x3 rotation, got shape {R.shape}")
+        R = orthonormalize(R)
+        t = vector3(t, "initial_pose translation")
         s = positive(s, "initial_pose scale")
         return R, t, s
-    X = np.asarray(initial_pose, dtype=np.float64)
+    X = real_array(initial_pose, "initial_pose", "4x4 matrix or (R, t, s)")
     if X.shape != (4, 4) or not np.all(np.isfinite(X)):
-        raise InputError(f"initial_pose: expected a 4x4 matrix or (R, t, s), got shape {X.shape}")
+        raise InputError(f"initial_pose: expected a finite 4x4 matrix or (R, t, s), got shape {X.shape}")
     A = X[:3, :3]
     det = float(np.linalg.det(A))
-    if det <= 0:
+    if not det > 1e-12:
         raise InputError("initial_pose: the 3x3 block must have a positive determinant")
     s = det ** (1.0 / 3.0)
-    return orthonormalize(A / s), X[:3, 3].copy(), s
+    return orthonormalize(A / s), vector3(X[:3, 3], "initial_pose translation"), positive(s, "initial_pose scale")
 
 
 def _yaws(yaw_candidates):
     if yaw_candidates is None:
         return np.zeros(1)
     if np.isscalar(yaw_candidates):
-        n = int(yaw_candidates)
-        if n < 1:
-            raise InputError(f"yaw_candidates: must be >= 1, got {n}")
+        n = count(yaw_candidates, "yaw_candidates", 1, MAX_YAW_CANDIDATES)
         return 2.0 * np.pi * np.arange(n) / n
-    y = np.asarray(yaw_candidates, dtype=float).reshape(-1)
-    if len(y) == 0 or not np.all(np.isfinite(y)):
-        raise InputError("yaw_candidates: expected a positive int or a non-empty list of finite yaws (rad)")
+    try:
+        y = real_array(yaw_candidates, "yaw_candidates", "list of yaws").reshape(-1)
+    except InputError:
+        y = np.zeros(0)
+    if len(y) == 0 or len(y) > MAX_YAW_CANDIDATES or not np.all(np.isfinite(y)):
+        raise InputError(f"yaw_candidates: expected an int in [1, {MAX_YAW_CANDIDATES}] or a non-empty list of at most "
+                         f"{MAX_YAW_CANDIDATES} finite yaws (rad)")
     return y
 
 
@@ -355,20 +372,33 @@ def infer_latent_pose(
     if not isinstance(space, ShapeSpace):
         raise InputError(f"space: expected a ShapeSpace, got {type(space).__name__}")
     O = as_points(observed, "observed", min_points=3, check_units=True)
-    camera = None
-    if camera_position is not None:
-        camera = np.asarray(camera_position, dtype=np.float64).reshape(-1)
-        if camera.shape != (3,) or not np.all(np.isfinite(camera)):
-            raise InputError(f"camera_position: expected a finite 3-vector, got shape {np.shape(camera_position)}")
+    camera = None if camera_position is None else vector3(camera_position, "camera_position")
     w = outlier_weight(w)
-    if prior < 0:
-        raise InputError(f"prior: must be >= 0, got {prior}")
-    lo, hi = (float(v) for v in scale_bounds)
+    prior = non_negative(prior, "prior")
+    try:
+        lo, hi = (real_number(v, "scale_bounds") for v in scale_bounds)
+    except (TypeError, ValueError):  # not a pair (InputError, a ValueError, is re-raised below)
+        lo = hi = float("nan")
     if not (0 < lo <= 1.0 <= hi):
-        raise InputError(f"scale_bounds: expected 0 < low <= 1 <= high, got {scale_bounds}")
+        raise InputError(f"scale_bounds: expected a pair 0 < low <= 1 <= high, got {scale_bounds!r}")
     R0, t0_given, s0 = _parse_initial_pose(initial_pose)
     yaws = _yaws(yaw_candidates)
-    prob = _Problem(space, O, camera, w, float(prior), (lo, hi), radius_factor, bool(fit_scale))
+    max_iter = count(max_iter, "max_iter", 1)
+    tol = non_negative(tol, "tol")
+    search_iter = count(search_iter, "search_iter", 1)
+    search_points = count(search_points, "search_points", 3)
+    max_points = count(max_points, "max_points", 3)
+    visibility_every = count(visibility_every, "visibility_every", 0)
+    radius_factor = positive(radius_factor, "radius_factor")
+    if not 1.0 < radius_factor <= MAX_RADIUS_FACTOR:
+        raise InputError(f"radius_factor: must be in (1, {MAX_RADIUS_FACTOR:g}], got {radius_factor}")
+    if sigma2_init is not None:
+        sigma2_init = positive(sigma2_init, "sigma2_init")
+    if residual_cpd:
+        if residual_beta is not None:
+            residual_beta = kernel_width(residual_beta, "residual_beta")
+        residual_lam = positive(residual_lam, "residual_lam")
+    prob = _Problem(space, O, camera, w, prior, (lo, hi), radius_factor, bool(fit_scale))
 
     with single_threaded_blas():
         x0 = np.zeros(space.q)
@@ -388,16 +418,16 @@ def infer_latent_pose(
             vis = prob.visible(T)
             s2 = max(initial_sigma2(T[vis], O), SIGMA2_MIN_M2)
             if sigma2_init is not None:
-                s2 = min(s2, positive(sigma2_init, "sigma2_init"))
+                s2 = min(s2, sigma2_init)
             return _State(x=x0.copy(), R=R, t=t, s=s0, sigma2=s2, visible=vis, yaw=float(yaw))
 
         # ---- search over yaw on a subsample
         start_energies = []
         if len(yaws) > 1:
-            O_sub = _subsample(O, int(search_points))
+            O_sub = _subsample(O, search_points)
             best = None
             for yaw in yaws:
-                st = prob.run(start(yaw), O_sub, int(search_iter), 0.0, vis_every=max(1, 2 * int(visibility_every)))
+                st = prob.run(start(yaw), O_sub, search_iter, 0.0, vis_every=max(1, 2 * visibility_every))
                 start_energies.append(st.energy)
                 if best is None or st.energy < best.energy:
                     best = st
@@ -408,11 +438,11 @@ def infer_latent_pose(
         t_search = time.perf_counter() - t0
         # ---- refine (on at most max_points observed points)
         best.visible = None
-        O_fit = _subsample(O, int(max_points))
+        O_fit = _subsample(O, max_points)
         n_thr = _n_threads()
         pool = ThreadPoolExecutor(n_thr) if n_thr > 1 else None
         try:
-            st = prob.run(best, O_fit, int(max_iter), float(tol), vis_every=int(visibility_every), pool=pool)
+            st = prob.run(best, O_fit, max_iter, tol, vis_every=visibility_every, pool=pool)
         finally:
             if pool is not None:
                 pool.shutdown()
@@ -426,7 +456,7 @@ def infer_latent_pose(
         if residual_cpd:
             src = completed[vis]
             if len(src) >= 3:
-                rb = space.beta * st.s if residual_beta is None else positive(residual_beta, "residual_beta")
+                rb = space.beta * st.s if residual_beta is None else residual_beta
                 r = nonrigid_cpd(src, O, beta=rb, lam=residual_lam, w=w, max_iter=50, tol=1e-5)
                 completed = completed.copy()
                 completed[vis] = r.transformed  # hidden points keep the latent completion

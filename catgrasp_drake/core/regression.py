@@ -16,7 +16,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from catgrasp_drake.core.validation import non_negative, real_array
 from catgrasp_drake.errors import InputError
+
+#: Largest accepted |value| in training data and latent vectors (squares must not overflow).
+_MAX_VALUE = 1e100
 
 
 @dataclass(frozen=True)
@@ -29,9 +33,14 @@ class LinearRegressor:
 
     def predict(self, x) -> np.ndarray:
         """Predict descriptors for one latent vector (q,) or a batch (n, q)."""
-        x = np.asarray(x, dtype=float)
+        x = real_array(x, "latent vector", f"({self.coef.shape[1]},) or (n, {self.coef.shape[1]}) array")
+        if x.ndim not in (1, 2):
+            raise InputError(f"latent vector: expected shape ({self.coef.shape[1]},) or (n, {self.coef.shape[1]}), "
+                             f"got {x.shape}")
         if x.shape[-1] != self.coef.shape[1]:
             raise InputError(f"latent vector has {x.shape[-1]} values, the regressor expects {self.coef.shape[1]}")
+        if not np.all(np.isfinite(x)) or (x.size and float(np.abs(x).max()) > _MAX_VALUE):
+            raise InputError(f"latent vector: contains NaN, inf or values beyond {_MAX_VALUE:g}")
         return self.intercept + x @ self.coef.T
 
 
@@ -41,21 +50,27 @@ def fit_ridge(X, Y, *, alpha: float = 1e-2, groups=None) -> LinearRegressor:
     With ``groups``, rows are weighted 1/size-of-their-group (see module doc).
     ``alpha`` >= 0 is the ridge penalty in units of the (unit-variance) latent space.
     """
-    X = np.asarray(X, dtype=float)
-    Y = np.asarray(Y, dtype=float)
+    X = real_array(X, "regression: X", "(n, q) array")
+    Y = real_array(Y, "regression: Y", "(n, D) array")
     if X.ndim != 2 or Y.ndim != 2 or X.shape[0] != Y.shape[0]:
         raise InputError(f"regression: X {X.shape} and Y {Y.shape} must be (n, q) and (n, D) with the same n")
     if X.shape[0] == 0:
         raise InputError("regression: no training samples (no successful grasps?)")
     if not (np.all(np.isfinite(X)) and np.all(np.isfinite(Y))):
         raise InputError("regression: training data contain NaN or inf")
-    if alpha < 0:
-        raise InputError(f"regression: alpha must be >= 0, got {alpha}")
+    if max(float(np.abs(X).max(initial=0.0)), float(np.abs(Y).max(initial=0.0))) > _MAX_VALUE:
+        raise InputError(f"regression: training data have values beyond {_MAX_VALUE:g}; rescale them")
+    alpha = non_negative(alpha, "regression: alpha")
     if groups is None:
         w = np.ones(X.shape[0])
     else:
-        _, inverse, counts = np.unique(np.asarray(groups), return_inverse=True, return_counts=True)
-        w = 1.0 / counts[inverse]
+        g = np.asarray(groups)
+        if g.shape != (X.shape[0],):
+            raise InputError(f"regression: groups must label each of the {X.shape[0]} rows, got shape {g.shape}")
+        if g.dtype.kind == "f" and not np.all(np.isfinite(g)):
+            raise InputError("regression: groups contain NaN or inf")
+        _, inverse, counts = np.unique(g, return_inverse=True, return_counts=True)
+        w = 1.0 / counts[inverse.reshape(-1)]
     w = w / w.sum()
     x_mean = w @ X
     y_mean = w @ Y

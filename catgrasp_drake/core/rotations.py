@@ -9,13 +9,19 @@ from __future__ import annotations
 
 import numpy as np
 
+from catgrasp_drake.core.validation import count, real_array, real_number
 from catgrasp_drake.errors import InputError
+
+#: Most rotations/quaternions drawn in one call (7 * 10^7 floats, ~0.5 GB).
+MAX_SAMPLES = 10_000_000
 
 
 def _as_generator(rng) -> np.random.Generator:
     if isinstance(rng, np.random.Generator):
         return rng
-    if isinstance(rng, (int, np.integer)):
+    if isinstance(rng, (int, np.integer)) and not isinstance(rng, bool):
+        if rng < 0:
+            raise InputError(f"rng: an int seed must be >= 0, got {rng}")
         return np.random.default_rng(int(rng))
     raise InputError(f"rng: expected a numpy.random.Generator or an int seed, got {type(rng).__name__}")
 
@@ -27,11 +33,16 @@ def orthonormalize(R) -> np.ndarray:
     decomposition, with the sign of the last singular direction flipped if
     needed so that ``det = +1``.
     """
-    A = np.asarray(R, dtype=np.float64)
+    A = real_array(R, "orthonormalize", "(..., 3, 3) array")
     if A.shape[-2:] != (3, 3):
         raise InputError(f"orthonormalize: expected (..., 3, 3) matrices, got {A.shape}")
     if not np.all(np.isfinite(A)):
         raise InputError("orthonormalize: matrices contain NaN or inf")
+    if A.size:  # the polar factor is scale-invariant: keep SVD away from overflow and underflow
+        big = np.abs(A).max(axis=(-2, -1), keepdims=True)
+        odd = (big > 1e100) | ((big < 1e-100) & (big > 0))
+        if np.any(odd):
+            A = np.where(odd, A / np.where(odd, big, 1.0), A)
     U, _, Vt = np.linalg.svd(A)
     d = np.sign(np.linalg.det(U @ Vt))
     d = np.where(d == 0, 1.0, d)
@@ -48,9 +59,7 @@ def shoemake_quaternions(rng, n: int) -> np.ndarray:
     returned scalar-first with ``w >= 0``. Shape (n, 4).
     """
     rng = _as_generator(rng)
-    n = int(n)
-    if n < 0:
-        raise InputError(f"n: must be >= 0, got {n}")
+    n = count(n, "n", 0, MAX_SAMPLES)
     u1, u2, u3 = rng.random((3, n))
     a, b = np.sqrt(1.0 - u1), np.sqrt(u1)
     q = np.stack([b * np.cos(2 * np.pi * u3), a * np.sin(2 * np.pi * u2), a * np.cos(2 * np.pi * u2),
@@ -79,11 +88,9 @@ def sample_rotations_within(rng, n: int, max_angle: float) -> np.ndarray:
     axis uniform on the sphere. Returns (n, 3, 3).
     """
     rng = _as_generator(rng)
-    n = int(n)
-    a = float(max_angle)
-    if n < 0:
-        raise InputError(f"n: must be >= 0, got {n}")
-    if not (np.isfinite(a) and a >= 0.0):
+    n = count(n, "n", 0, MAX_SAMPLES)
+    a = real_number(max_angle, "max_angle")
+    if not a >= 0.0:
         raise InputError(f"max_angle: must be a finite angle >= 0 rad, got {max_angle!r}")
     a = min(a, np.pi)
     if n == 0:
@@ -116,12 +123,18 @@ def sample_rotations_within(rng, n: int, max_angle: float) -> np.ndarray:
 
 def quat_to_matrix(q) -> np.ndarray:
     """Rotation matrices (..., 3, 3) from quaternions (..., 4) ``(w, x, y, z)`` (normalised first)."""
-    q = np.asarray(q, dtype=np.float64)
-    if q.shape[-1] != 4:
+    q = real_array(q, "quat_to_matrix", "(..., 4) array")
+    if q.shape[-1:] != (4,):
         raise InputError(f"quat_to_matrix: expected (..., 4) quaternions, got {q.shape}")
-    norm = np.linalg.norm(q, axis=-1, keepdims=True)
-    if not np.all(np.isfinite(q)) or np.any(norm == 0):
+    if not np.all(np.isfinite(q)):
         raise InputError("quat_to_matrix: quaternions must be finite and non-zero")
+    big = np.abs(q).max(axis=-1, keepdims=True) if q.size else np.ones(q.shape[:-1] + (1,))
+    if np.any(big == 0):
+        raise InputError("quat_to_matrix: quaternions must be finite and non-zero")
+    odd = (big > 1e100) | (big < 1e-100)  # rescale only there: ordinary inputs keep their exact rounding
+    if np.any(odd):
+        q = np.where(odd, q / big, q)  # scale-free: no overflow or underflow in the norm
+    norm = np.linalg.norm(q, axis=-1, keepdims=True)
     w, x, y, z = np.moveaxis(q / norm, -1, 0)
     R = np.stack([
         1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w),
@@ -137,9 +150,13 @@ def matrix_to_quat(R) -> np.ndarray:
     Numerically robust (Shepperd's method: picks the largest of w, x, y, z
     to divide by).
     """
-    R = np.asarray(R, dtype=np.float64)
+    R = real_array(R, "matrix_to_quat", "(..., 3, 3) array")
     if R.shape[-2:] != (3, 3):
         raise InputError(f"matrix_to_quat: expected (..., 3, 3) matrices, got {R.shape}")
+    if not np.all(np.isfinite(R)):
+        raise InputError("matrix_to_quat: matrices contain NaN or inf")
+    if R.size and float(np.abs(R).max()) > 1.0 + 1e-6:
+        raise InputError("matrix_to_quat: not rotation matrices (entries beyond 1); orthonormalize them first")
     shape = R.shape[:-2]
     R = R.reshape(-1, 3, 3)
     tr = np.trace(R, axis1=1, axis2=2)

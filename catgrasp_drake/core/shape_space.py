@@ -37,14 +37,16 @@ from typing import Callable, Mapping, Sequence
 import numpy as np
 from scipy.spatial import cKDTree
 
-from catgrasp_drake.core.cpd import DEFAULT_BETA_M, DEFAULT_LAMBDA, gaussian_kernel, nonrigid_cpd
+from catgrasp_drake.core.cpd import DEFAULT_BETA_M, DEFAULT_LAMBDA, gaussian_kernel, kernel_width, nonrigid_cpd
 from catgrasp_drake.core.deformation import deform_points
 from catgrasp_drake.core.fileio import load_arrays, save_arrays
-from catgrasp_drake.core.validation import as_points, positive
+from catgrasp_drake.core.validation import as_points, count, non_negative, positive, real_number
 from catgrasp_drake.errors import InputError, ModelFileError
 
 FILE_KIND = "catgrasp.shape_space"
 FILE_VERSION = 1
+#: Largest accepted |x_j| of a whitened latent vector (the training set has |x_j| ~ 1).
+MAX_LATENT = 1e6
 #: Below this RMS spread of the CPD weights (m) the instances are taken as identical.
 _MIN_STD_M = 1e-7
 
@@ -73,15 +75,20 @@ def pca_em(Y, q: int, *, center: bool = True, max_iter: int = 1000, tol: float =
     rotated to the principal axes (SVD of the q-dimensional projection) so
     that the result equals SVD-based PCA up to the signs of the components.
     """
-    Y = np.asarray(Y, dtype=np.float64)
+    try:
+        Y = np.asarray(Y, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise InputError(f"pca_em: expected a numeric (K, p) data matrix, got {type(Y).__name__}") from None
     if Y.ndim != 2 or Y.shape[0] < 2 or Y.shape[1] < 1:
         raise InputError(f"pca_em: expected a (K >= 2, p) data matrix, got shape {Y.shape}")
     if not np.all(np.isfinite(Y)):
         raise InputError("pca_em: data contain NaN or inf")
+    if float(np.abs(Y).max()) > 1e150:
+        raise InputError("pca_em: data values beyond 1e150 (their squares overflow); rescale the data")
     K, p = Y.shape
-    q = int(q)
-    if not (1 <= q <= min(K, p)):
-        raise InputError(f"pca_em: q must be in [1, {min(K, p)}], got {q}")
+    q = count(q, "pca_em: q", 1, min(K, p))
+    max_iter = count(max_iter, "pca_em: max_iter", 1)
+    tol = non_negative(tol, "pca_em: tol")
     mean = Y.mean(axis=0) if center else np.zeros(p)
     Yc = Y - mean
     rng = np.random.default_rng(seed)
@@ -150,11 +157,19 @@ class ShapeSpace:
 
     # ----- latent <-> W
     def _check_x(self, x) -> np.ndarray:
-        x = np.asarray(x, dtype=np.float64)
+        if isinstance(x, (str, bytes)) or x is None:
+            raise InputError(f"latent vector: expected {self.q} numbers, got {type(x).__name__}")
+        try:
+            x = np.asarray(x, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise InputError(f"latent vector: expected {self.q} numbers, got {type(x).__name__}") from None
         if x.shape[-1:] != (self.q,) or x.ndim > 2:
             raise InputError(f"latent vector: expected shape ({self.q},) or (n, {self.q}), got {x.shape}")
         if not np.all(np.isfinite(x)):
             raise InputError("latent vector contains NaN or inf")
+        if x.size and float(np.abs(x).max()) > MAX_LATENT:
+            raise InputError(f"latent vector: values reach {float(np.abs(x).max()):.3g}; whitened latent "
+                             f"coordinates are O(1) (|x| <= {MAX_LATENT:g})")
         return x
 
     def decode(self, x) -> np.ndarray:
@@ -165,9 +180,16 @@ class ShapeSpace:
 
     def encode(self, W) -> np.ndarray:
         """W (M, 3) -> latent x (q,) (orthogonal projection onto the space); (n, M, 3) -> (n, q)."""
-        W = np.asarray(W, dtype=np.float64)
+        if isinstance(W, (str, bytes)) or W is None:
+            raise InputError(f"W: expected a numeric ({self.n_points}, 3) array, got {type(W).__name__}")
+        try:
+            W = np.asarray(W, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise InputError(f"W: expected a numeric ({self.n_points}, 3) array, got {type(W).__name__}") from None
         if W.shape[-2:] != (self.n_points, 3) or W.ndim > 3:
             raise InputError(f"W: expected shape ({self.n_points}, 3) or (n, {self.n_points}, 3), got {W.shape}")
+        if not np.all(np.isfinite(W)) or float(np.abs(W).max()) > 1e6:
+            raise InputError("W: contains NaN, inf or values beyond 1e6 m")
         y = (W - self.W_mean).reshape(W.shape[:-2] + (-1,)) / self.feature_std
         return (y @ self.components.T) / np.sqrt(self.eigenvalues)
 
@@ -233,6 +255,10 @@ class ShapeSpace:
         missing = [k for k in need if k not in arrays]
         if missing:
             raise ModelFileError(f"{source}: shape space lacks arrays {missing}")
+        bad = [k for k in need if not (np.issubdtype(np.asarray(arrays[k]).dtype, np.integer)
+                                       or np.issubdtype(np.asarray(arrays[k]).dtype, np.floating))]
+        if bad:
+            raise ModelFileError(f"{source}: shape space arrays {bad} are not real numbers")
         arrays = {k: np.asarray(arrays[k], dtype=np.float64) for k in need}
         try:
             M, q = int(meta["n_points"]), int(meta["q"])
@@ -254,23 +280,33 @@ class ShapeSpace:
             raise ModelFileError(f"{source}: shape space arrays have inconsistent shapes (M={M}, q={q})")
         if not all(np.all(np.isfinite(a)) for a in arrays.values()) or np.any(arrays["eigenvalues"] <= 0):
             raise ModelFileError(f"{source}: shape space arrays contain NaN/inf or non-positive variances")
-        return cls(
-            canonical=arrays["canonical"],
-            beta=beta,
-            lam=lam,
-            w=w,
-            W_mean=arrays["W_mean"],
-            feature_std=arrays["feature_std"],
-            components=arrays["components"],
-            eigenvalues=arrays["eigenvalues"],
-            latent_train=arrays["latent_train"],
-            W_train=arrays["W_train"],
-            variance=float(meta.get("variance", 0.95)),
-            total_variance=float(meta.get("total_variance", 0.0)),
-            canonical_index=int(meta.get("canonical_index", -1)),
-            standardize=str(meta.get("standardize", "global")),
-            meta=dict(meta.get("extra", {})),
-        )
+        try:
+            kernel_width(beta)
+            positive(lam, "lam")
+            if not 0.0 <= w < 1.0:
+                raise InputError(f"w = {w}")
+        except InputError as e:
+            raise ModelFileError(f"{source}: shape space header has a bad CPD parameter ({e})") from None
+        try:
+            return cls(
+                canonical=arrays["canonical"],
+                beta=beta,
+                lam=lam,
+                w=w,
+                W_mean=arrays["W_mean"],
+                feature_std=arrays["feature_std"],
+                components=arrays["components"],
+                eigenvalues=arrays["eigenvalues"],
+                latent_train=arrays["latent_train"],
+                W_train=arrays["W_train"],
+                variance=float(meta.get("variance", 0.95)),
+                total_variance=float(meta.get("total_variance", 0.0)),
+                canonical_index=int(meta.get("canonical_index", -1)),
+                standardize=str(meta.get("standardize", "global")),
+                meta=dict(meta.get("extra", {})),
+            )
+        except (TypeError, ValueError, AttributeError, OverflowError):
+            raise ModelFileError(f"{source}: shape space header has a bad field") from None
 
     def save(self, path) -> None:
         """Write the space to ``path`` (.npz + JSON header, kind ``catgrasp.shape_space`` v1, atomic, no pickle)."""
@@ -381,19 +417,23 @@ def build_shape_space(
     K = len(clouds)
     if K < 2:
         raise InputError(f"instances: a shape space needs at least 2 instances, got {K}")
-    variance = float(variance)
+    variance = real_number(variance, "variance")
     if not (0.0 < variance <= 1.0):
         raise InputError(f"variance: must be in (0, 1], got {variance}")
-    beta = positive(beta, "beta")
+    beta = kernel_width(beta)
     lam = positive(lam, "lam")
+    if max_q is not None:
+        max_q = count(max_q, "max_q", 1)
+    if standardize not in ("global", "feature"):
+        raise InputError(f"standardize: expected 'global' or 'feature', got {standardize!r}")
     cache: dict[tuple[int, int], np.ndarray] = dict(registrations or {})
 
     if canonical_index is None or canonical_index == "auto":
         candidates = list(range(K))
     else:
         try:
-            c = int(canonical_index)
-        except (TypeError, ValueError):
+            c = count(canonical_index, "canonical_index", minimum=-(2**62))
+        except InputError:
             raise InputError(f"canonical_index: expected an int, 'auto' or None, got {canonical_index!r}") from None
         if not (0 <= c < K):
             raise InputError(f"canonical_index: {c} is out of range for {K} instances")

@@ -16,10 +16,12 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import ConvexHull, QhullError
 
-from catgrasp_drake.core.validation import as_points, positive
+from catgrasp_drake.core.validation import as_points, positive, real_number, vector3
 from catgrasp_drake.errors import InputError
 
 DEFAULT_RADIUS_FACTOR = 100.0
+#: Largest accepted radius factor (beyond, the flipped points differ by less than float64 resolves).
+MAX_RADIUS_FACTOR = 1e9
 
 
 def hidden_point_removal(points, camera_position, *, radius_factor: float = DEFAULT_RADIUS_FACTOR) -> np.ndarray:
@@ -30,12 +32,11 @@ def hidden_point_removal(points, camera_position, *, radius_factor: float = DEFA
     reported visible.
     """
     P = as_points(points, "points", min_points=1)
-    cam = np.asarray(camera_position, dtype=np.float64).reshape(-1)
-    if cam.shape != (3,) or not np.all(np.isfinite(cam)):
-        raise InputError(f"camera_position: expected a finite 3-vector, got {np.asarray(camera_position).shape}")
+    cam = vector3(camera_position, "camera_position")
     radius_factor = positive(radius_factor, "radius_factor")
-    if radius_factor <= 1.0:
-        raise InputError(f"radius_factor: must be > 1 (the sphere must enclose the cloud), got {radius_factor}")
+    if not 1.0 < radius_factor <= MAX_RADIUS_FACTOR:
+        raise InputError(f"radius_factor: must be in (1, {MAX_RADIUS_FACTOR:g}] (the sphere must enclose the cloud; "
+                         f"larger loses all precision), got {radius_factor}")
     q = P - cam
     norms = np.linalg.norm(q, axis=1)
     at_cam = norms <= 1e-12
@@ -67,6 +68,7 @@ def hidden_point_removal(points, camera_position, *, radius_factor: float = DEFA
 
 def camera_on_sphere_position(center, distance: float, azimuth: float, elevation: float) -> np.ndarray:
     """Camera position ``distance`` m from ``center`` at ``azimuth`` (about +z, from +x) and ``elevation`` (rad)."""
-    c = np.asarray(center, dtype=np.float64).reshape(3)
+    c = vector3(center, "center")
     d = positive(distance, "distance")
+    azimuth, elevation = real_number(azimuth, "azimuth"), real_number(elevation, "elevation")
     return c + d * np.array([np.cos(elevation) * np.cos(azimuth), np.cos(elevation) * np.sin(azimuth), np.sin(elevation)])

@@ -19,13 +19,18 @@ def read_mesh(path: str | os.PathLike, *, require_watertight: bool = False) -> t
     triangles, and InputError if it is not watertight (when required) or looks
     like millimetres.
     """
+    if isinstance(path, bytes):
+        path = os.fsdecode(path)
+    if not isinstance(path, (str, os.PathLike)):
+        raise InputError(f"path: expected a mesh file name, got {type(path).__name__}")
     path = Path(path)
     if not path.is_file():
         raise ModelFileError(f"{path}: mesh file not found")
     try:
         mesh = trimesh.load(str(path), force="mesh", process=True)
     except Exception as e:  # trimesh raises many types for corrupt files
-        raise ModelFileError(f"{path}: unreadable mesh ({type(e).__name__}: {e})") from None
+        first = str(e).splitlines()[0][:120] if str(e).strip() else ""
+        raise ModelFileError(f"{path}: unreadable mesh ({type(e).__name__}: {first})") from None
     if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
         raise ModelFileError(f"{path}: the file holds no triangles")
     if not np.all(np.isfinite(mesh.vertices)):

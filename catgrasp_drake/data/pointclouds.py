@@ -16,11 +16,17 @@ from dataclasses import dataclass
 import numpy as np
 import trimesh
 
-from catgrasp_drake.core.validation import as_points, positive
+from catgrasp_drake.core.validation import as_points, count, non_negative, positive, real_number, vector3
 from catgrasp_drake.data.open3d_import import import_open3d
 from catgrasp_drake.errors import InputError
 
 DEFAULT_VOXEL_M = 0.01
+#: Largest image side (pixels) of a simulated camera, and largest full-cloud resolution.
+MAX_IMAGE_SIDE = 4096
+#: Deepest icosphere subdivision of :func:`full_cloud` (5: 10242 viewpoints).
+MAX_SUBDIVISIONS = 5
+#: Most rays of one :func:`full_cloud` (the default casts 42 x 160^2 = 1.1e6).
+MAX_RAYS = 20_000_000
 
 
 @dataclass(frozen=True)
@@ -33,6 +39,16 @@ class PinholeCamera:
     width: int = 160
     height: int = 120
     fov_y_deg: float = 45.0
+
+    def __post_init__(self):
+        eye, target, _ = (vector3(getattr(self, name), f"camera {name}") for name in ("eye", "target", "up"))
+        if np.linalg.norm(target - eye) < 1e-9:
+            raise InputError("camera: eye and target coincide")
+        count(self.width, "camera width", 1, MAX_IMAGE_SIDE)
+        count(self.height, "camera height", 1, MAX_IMAGE_SIDE)
+        fov = real_number(self.fov_y_deg, "camera fov_y_deg")
+        if not 0.0 < fov < 180.0:
+            raise InputError(f"camera fov_y_deg: must be in (0, 180) degrees, got {fov}")
 
     def rays(self) -> tuple[np.ndarray, np.ndarray]:
         """(origins, unit directions) of one ray per pixel, each ``(H*W, 3)``."""
@@ -58,7 +74,9 @@ class PinholeCamera:
 
 def camera_on_sphere(target, distance: float, azimuth_rad: float, elevation_rad: float, **kw) -> PinholeCamera:
     """Camera at ``distance`` from ``target``; azimuth from +x toward +y, elevation above the x-y plane."""
-    target = np.asarray(target, float)
+    target = vector3(target, "target")
+    distance = positive(distance, "distance")
+    azimuth_rad, elevation_rad = real_number(azimuth_rad, "azimuth_rad"), real_number(elevation_rad, "elevation_rad")
     eye = target + distance * np.array([
         np.cos(elevation_rad) * np.cos(azimuth_rad),
         np.cos(elevation_rad) * np.sin(azimuth_rad),
@@ -100,6 +118,9 @@ def voxel_downsample(points, voxel: float = DEFAULT_VOXEL_M) -> np.ndarray:
     """
     points = as_points(points, "points")
     voxel = positive(voxel, "voxel")
+    if float(np.abs(points).max()) / voxel > 2.0**60:
+        raise InputError(f"voxel: {voxel:g} m is too small for coordinates up to {float(np.abs(points).max()):.3g} m "
+                         "(voxel indices overflow)")
     keys = np.floor(points / voxel).astype(np.int64)
     uniq, inverse = np.unique(keys, axis=0, return_inverse=True)
     inverse = inverse.reshape(-1)
@@ -112,6 +133,10 @@ def voxel_downsample(points, voxel: float = DEFAULT_VOXEL_M) -> np.ndarray:
 def _check_mesh(mesh) -> trimesh.Trimesh:
     if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
         raise InputError("mesh: expected a non-empty trimesh.Trimesh")
+    v = np.asarray(mesh.vertices)
+    if not np.all(np.isfinite(v)):
+        raise InputError("mesh: has NaN or inf vertices")
+    as_points(v, "mesh vertices")  # metres, within MAX_COORDINATE_M
     return mesh
 
 
@@ -129,8 +154,17 @@ def full_cloud(
     ``resolution`` x ``resolution`` image. Then a voxel grid of ``voxel`` metres.
     """
     mesh = _check_mesh(mesh)
+    voxel = positive(voxel, "voxel")
+    subdivisions = count(subdivisions, "subdivisions", 0, MAX_SUBDIVISIONS)
+    resolution = count(resolution, "resolution", 1, MAX_IMAGE_SIDE)
+    n_views = 10 * 4**subdivisions + 2
+    if n_views * resolution**2 > MAX_RAYS:
+        raise InputError(f"full_cloud: {n_views} views of {resolution}x{resolution} rays exceed {MAX_RAYS:.0e} rays; "
+                         "lower resolution or subdivisions")
     center = mesh.bounds.mean(axis=0)
     radius = 0.5 * float(np.linalg.norm(mesh.extents))
+    if not radius > 1e-6:
+        raise InputError(f"mesh: spans {2 * radius:.3g} m; too small to ray-cast (metres expected)")
     distance = 2.0 * radius
     fov = 2 * np.degrees(np.arcsin(min(0.99, 1.05 * radius / distance)))
     views = trimesh.creation.icosphere(subdivisions=subdivisions).vertices
@@ -144,6 +178,8 @@ def full_cloud(
     origins, directions = np.vstack(origins), np.vstack(directions)
     t = _cast(mesh, origins, directions)
     hit = np.isfinite(t)
+    if not np.any(hit):
+        raise InputError("full_cloud: no ray hit the mesh (degenerate or flat mesh?)")
     return voxel_downsample(origins[hit] + t[hit, None] * directions[hit], voxel)
 
 
@@ -161,6 +197,13 @@ def partial_cloud(
     needs an explicit ``rng``. Raises InputError if the camera sees nothing.
     """
     mesh = _check_mesh(mesh)
+    if not isinstance(camera, PinholeCamera):
+        raise InputError(f"camera: expected a PinholeCamera, got {type(camera).__name__}")
+    depth_noise_std = non_negative(depth_noise_std, "depth_noise_std")
+    if voxel is not None:
+        voxel = positive(voxel, "voxel")
+    if rng is not None and not isinstance(rng, np.random.Generator):
+        raise InputError(f"rng: expected a numpy.random.Generator, got {type(rng).__name__}")
     origins, directions = camera.rays()
     t = _cast(mesh, origins, directions)
     hit = np.isfinite(t)

@@ -19,14 +19,17 @@ from pydrake.math import RigidTransform
 from pydrake.systems.framework import LeafSystem
 
 from catgrasp_drake.category_model import CategoryModel
+from catgrasp_drake.core.validation import real_array
 from catgrasp_drake.errors import InputError
 from catgrasp_drake.grasping.motion import GraspMotion
 
 
 def predict_motion_W(model: CategoryModel, x, X_WO, scale: float) -> GraspMotion:
     """The transferred grasp (control poses of the hand base H in W, postures) for latent ``x`` at ``X_WO``."""
-    X = np.asarray(X_WO.GetAsMatrix4() if isinstance(X_WO, RigidTransform) else X_WO, float)
-    return model.transfer(x, X[:3, :3], X[:3, 3], float(scale), frame="world")
+    X = X_WO.GetAsMatrix4() if isinstance(X_WO, RigidTransform) else real_array(X_WO, "X_WO", "4x4 pose")
+    if X.shape != (4, 4):
+        raise InputError(f"X_WO: expected a 4x4 pose or a RigidTransform, got shape {X.shape}")
+    return model.transfer(x, X[:3, :3], X[:3, 3], scale, frame="world")
 
 
 class GraspRegressor(LeafSystem):

@@ -19,6 +19,7 @@ from pydrake.perception import BaseField, DepthImageToPointCloud, Fields, PointC
 from pydrake.systems.framework import Diagram, DiagramBuilder, LeafSystem
 from pydrake.systems.sensors import CameraInfo, ImageDepth32F, ImageLabel16I, PixelType
 
+from catgrasp_drake.core.validation import MAX_COORDINATE_M, count, non_negative, real_array
 from catgrasp_drake.errors import InputError
 
 
@@ -53,7 +54,8 @@ def _voxel_downsample(points: np.ndarray, voxel_size: float) -> np.ndarray:
 
 def _crop_and_voxelize(p_W: np.ndarray, lower: np.ndarray, upper: np.ndarray, voxel_size: float) -> np.ndarray:
     """Finite points of ``p_W`` (N, 3) inside the box [lower, upper], voxel-down-sampled."""
-    p = p_W[np.all(np.isfinite(p_W), axis=1)]
+    with np.errstate(invalid="ignore"):  # NaN rows are dropped
+        p = p_W[np.all(np.abs(p_W) <= MAX_COORDINATE_M, axis=1)]  # finite and physical (no 1e30 m returns)
     p = p[np.all((p >= lower) & (p <= upper), axis=1)]
     return _voxel_downsample(p, voxel_size)
 
@@ -86,11 +88,13 @@ class LabelDepthMask(LeafSystem):
 
     def __init__(self, width: int, height: int, object_label: int, *, noise_std: float = 0.0, seed: int = 0):
         super().__init__()
-        if noise_std < 0:
-            raise InputError(f"noise_std: expected >= 0, got {noise_std}")
-        self._object_label = int(object_label)
-        self._noise_std = float(noise_std)
-        self._seed = int(seed)
+        width, height = count(width, "width", 1), count(height, "height", 1)
+        self._size = (height, width)
+        self._object_label = count(object_label, "object_label", -32768, 32767)  # ImageLabel16I values
+        self._noise_std = non_negative(noise_std, "noise_std")
+        if self._noise_std > 1.0:
+            raise InputError(f"noise_std: {self._noise_std:g} m of depth noise; expected metres (<= 1)")
+        self._seed = count(seed, "seed", 0)
         self._depth_in = self.DeclareAbstractInputPort("depth_image", AbstractValue.Make(ImageDepth32F(width, height)))
         self._label_in = self.DeclareAbstractInputPort("label_image", AbstractValue.Make(ImageLabel16I(width, height)))
         self.DeclareAbstractOutputPort("depth_image", lambda: AbstractValue.Make(ImageDepth32F(width, height)),
@@ -99,6 +103,9 @@ class LabelDepthMask(LeafSystem):
     def _calc(self, context, output):
         depth = self._depth_in.Eval(context).data[:, :, 0]
         label = self._label_in.Eval(context).data[:, :, 0]
+        if depth.shape != self._size or label.shape != self._size:
+            raise InputError(f"LabelDepthMask: depth image {depth.shape[::-1]} and label image {label.shape[::-1]} "
+                             f"must both be {self._size[::-1]} (width, height) as declared")
         rng = None
         if self._noise_std > 0:
             rng = np.random.default_rng([self._seed, int(round(context.get_time() * 1e6))])
@@ -117,9 +124,15 @@ class CloudCropVoxel(LeafSystem):
 
     def __init__(self, crop_min, crop_max, voxel_size: float):
         super().__init__()
-        self._lower = np.asarray(crop_min, float)
-        self._upper = np.asarray(crop_max, float)
-        self._voxel = float(voxel_size)
+        self._lower = real_array(crop_min, "crop_min", "3-vector").reshape(-1)
+        self._upper = real_array(crop_max, "crop_max", "3-vector").reshape(-1)
+        if (self._lower.shape != (3,) or self._upper.shape != (3,) or np.any(np.isnan(self._lower))
+                or np.any(np.isnan(self._upper)) or np.any(self._lower > self._upper)):
+            raise InputError(f"crop_min/crop_max: expected two 3-vectors with crop_min <= crop_max, got "
+                             f"{np.shape(crop_min)} and {np.shape(crop_max)}")
+        self._voxel = non_negative(voxel_size, "voxel_size")
+        if 0.0 < self._voxel < 1e-9:
+            raise InputError(f"voxel_size: {self._voxel:g} m is below 1 nm; use 0 for no down-sampling")
         self._in = self.DeclareAbstractInputPort("point_cloud", AbstractValue.Make(PointCloud()))
         self.DeclareAbstractOutputPort("point_cloud", lambda: AbstractValue.Make(PointCloud()), self._calc)
 

@@ -33,6 +33,7 @@ from pydrake.systems.framework import EventStatus, LeafSystem
 
 from catgrasp_drake.core.inference import InferenceResult, infer_latent_pose
 from catgrasp_drake.core.shape_space import ShapeSpace
+from catgrasp_drake.core.validation import real_array, vector3
 from catgrasp_drake.errors import CatgraspError, InputError
 from catgrasp_drake.systems.object_cloud import cloud_from_points, points_from_cloud
 
@@ -71,6 +72,21 @@ class ShapeEstimate:
         return self
 
 
+def check_table_pose(X_WT) -> np.ndarray:
+    """``X_WT`` (RigidTransform or 4x4) as a finite rigid 4x4 matrix within MAX_COORDINATE_M, or InputError."""
+    if isinstance(X_WT, RigidTransform):
+        X_WT = X_WT.GetAsMatrix4()
+    X = real_array(X_WT, "X_WT", "4x4 pose")
+    if X.shape != (4, 4) or not np.all(np.isfinite(X)):
+        raise InputError(f"X_WT: expected a finite 4x4 pose, got shape {X.shape}")
+    R = X[:3, :3]
+    if (np.abs(R.T @ R - np.eye(3)).max() > 1e-6 or np.linalg.det(R) < 0
+            or np.abs(X[3] - [0, 0, 0, 1]).max() > 1e-9):
+        raise InputError("X_WT: not a rigid transform (rotation block not orthonormal or last row not [0, 0, 0, 1])")
+    vector3(X[:3, 3], "X_WT translation")
+    return X
+
+
 def failed_estimate(q: int, status: str, observed_W=np.zeros((0, 3))) -> ShapeEstimate:
     return ShapeEstimate(False, status, np.zeros(q), np.eye(4), 1.0, np.zeros((0, 3)), float("inf"), 0.0,
                          np.asarray(observed_W, float).reshape(-1, 3))
@@ -86,14 +102,20 @@ def estimate_on_table(space: ShapeSpace, p_W: np.ndarray, X_WT: np.ndarray, *, c
     failed estimate (``ok`` False), never an exception; bad arguments raise
     InputError.
     """
-    p_W = np.asarray(p_W, float).reshape(-1, 3)
+    if not isinstance(space, ShapeSpace):
+        raise InputError(f"space: expected a ShapeSpace, got {type(space).__name__}")
+    X_WT = check_table_pose(X_WT)
+    p_W = real_array(p_W, "p_W", "(N, 3) array")
+    if p_W.size == 0:
+        p_W = p_W.reshape(0, 3)
+    if p_W.ndim != 2 or p_W.shape[1] != 3:
+        raise InputError(f"p_W: expected shape (N, 3), got {p_W.shape}")
     p_W = p_W[np.all(np.isfinite(p_W), axis=1)]
     if len(p_W) < MIN_OBSERVED_POINTS:
         return failed_estimate(space.q, f"no object in view ({len(p_W)} points < {MIN_OBSERVED_POINTS})", p_W)
-    X_WT = np.asarray(X_WT, float)
     R_WT, p_WT = X_WT[:3, :3], X_WT[:3, 3]
+    cam_T = None if camera_W is None else (vector3(camera_W, "camera_W") - p_WT) @ R_WT
     p_T = (p_W - p_WT) @ R_WT  # R_TW = R_WT^T
-    cam_T = None if camera_W is None else (np.asarray(camera_W, float) - p_WT) @ R_WT
     try:
         r = infer_latent_pose(space, p_T, camera_position=cam_T, yaw_candidates=yaw_candidates, **inference_kwargs)
     except CatgraspError as e:
@@ -131,9 +153,7 @@ class LatentShapeEstimator(LeafSystem):
         if not isinstance(space, ShapeSpace):
             raise InputError(f"space: expected a ShapeSpace, got {type(space).__name__}")
         self._space = space
-        self._X_WT = np.asarray(X_WT.GetAsMatrix4() if isinstance(X_WT, RigidTransform) else X_WT, float)
-        if self._X_WT.shape != (4, 4):
-            raise InputError(f"X_WT: expected a 4x4 pose, got shape {self._X_WT.shape}")
+        self._X_WT = check_table_pose(X_WT)
         self._yaws = yaw_candidates
         self._kwargs = dict(inference_kwargs)
         self._cloud_in = self.DeclareAbstractInputPort("object_cloud_W", AbstractValue.Make(PointCloud()))
