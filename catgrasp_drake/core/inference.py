@@ -439,8 +439,8 @@ def infer_latent_pose(
         # ---- refine (on at most max_points observed points)
         best.visible = None
         O_fit = _subsample(O, max_points)
-        n_thr = _n_threads()
-        pool = ThreadPoolExecutor(n_thr) if n_thr > 1 else None
+        # a pool even on one core: whether the E-step is split into blocks must not depend on the machine
+        pool = ThreadPoolExecutor(_n_threads())
         try:
             st = prob.run(best, O_fit, max_iter, tol, vis_every=visibility_every, pool=pool)
         finally:
