@@ -40,7 +40,7 @@ from scipy.spatial import cKDTree
 from catgrasp_drake.core.cpd import DEFAULT_BETA_M, DEFAULT_LAMBDA, gaussian_kernel, kernel_width, nonrigid_cpd
 from catgrasp_drake.core.deformation import deform_points
 from catgrasp_drake.core.fileio import load_arrays, save_arrays
-from catgrasp_drake.core.validation import as_points, count, non_negative, positive, real_number
+from catgrasp_drake.core.validation import as_points, count, non_negative, positive, real_array, real_number
 from catgrasp_drake.errors import InputError, ModelFileError
 
 FILE_KIND = "catgrasp.shape_space"
@@ -157,12 +157,7 @@ class ShapeSpace:
 
     # ----- latent <-> W
     def _check_x(self, x) -> np.ndarray:
-        if isinstance(x, (str, bytes)) or x is None:
-            raise InputError(f"latent vector: expected {self.q} numbers, got {type(x).__name__}")
-        try:
-            x = np.asarray(x, dtype=np.float64)
-        except (TypeError, ValueError):
-            raise InputError(f"latent vector: expected {self.q} numbers, got {type(x).__name__}") from None
+        x = real_array(x, "latent vector", f"({self.q},) vector")
         if x.shape[-1:] != (self.q,) or x.ndim > 2:
             raise InputError(f"latent vector: expected shape ({self.q},) or (n, {self.q}), got {x.shape}")
         if not np.all(np.isfinite(x)):
@@ -180,12 +175,7 @@ class ShapeSpace:
 
     def encode(self, W) -> np.ndarray:
         """W (M, 3) -> latent x (q,) (orthogonal projection onto the space); (n, M, 3) -> (n, q)."""
-        if isinstance(W, (str, bytes)) or W is None:
-            raise InputError(f"W: expected a numeric ({self.n_points}, 3) array, got {type(W).__name__}")
-        try:
-            W = np.asarray(W, dtype=np.float64)
-        except (TypeError, ValueError):
-            raise InputError(f"W: expected a numeric ({self.n_points}, 3) array, got {type(W).__name__}") from None
+        W = real_array(W, "W", f"({self.n_points}, 3) array")
         if W.shape[-2:] != (self.n_points, 3) or W.ndim > 3:
             raise InputError(f"W: expected shape ({self.n_points}, 3) or (n, {self.n_points}, 3), got {W.shape}")
         if not np.all(np.isfinite(W)) or float(np.abs(W).max()) > 1e6:

@@ -113,13 +113,8 @@ def real_number(value, name: str) -> float:
 
 def positive(value, name: str) -> float:
     """Return ``value`` as a finite float > 0 or raise InputError."""
-    if isinstance(value, (bool, np.bool_, str, bytes)) or value is None:
-        raise InputError(f"{name}: expected a positive number, got {_short(value)}")
-    try:
-        v = float(value)
-    except (TypeError, ValueError, OverflowError):
-        raise InputError(f"{name}: expected a positive number, got {_short(value)}") from None
-    if not np.isfinite(v) or v <= 0.0:
+    v = real_number(value, name)
+    if v <= 0.0:
         raise InputError(f"{name}: must be a finite number > 0, got {_short(value)}")
     return v
 
