@@ -12,7 +12,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from catgrasp_drake.errors import CatgraspError, InputError
+from catgrasp_drake.errors import CatgraspError, InputError, one_line
 
 
 # ----------------------------------------------------------------------------- argument checks
@@ -328,20 +328,15 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
-def _one_line(e: BaseException) -> str:
-    lines = str(e).strip().splitlines()
-    return lines[0] if lines else type(e).__name__
-
-
 def main(argv=None) -> int:
     args = build_parser().parse_args(argv)
     try:
         return int(args.func(args) or 0)
     except CatgraspError as e:
-        print(f"catgrasp: error: {_one_line(e)}", file=sys.stderr)
+        print(f"catgrasp: error: {one_line(e, with_type=False)}", file=sys.stderr)
         return 2
     except (OSError, ImportError) as e:  # a file system problem, a missing optional library: no traceback
-        print(f"catgrasp: error: {type(e).__name__}: {_one_line(e)}", file=sys.stderr)
+        print(f"catgrasp: error: {type(e).__name__}: {one_line(e, with_type=False)}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:
         print("catgrasp: interrupted", file=sys.stderr)

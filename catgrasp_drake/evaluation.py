@@ -37,7 +37,7 @@ from typing import Callable
 import numpy as np
 
 from catgrasp_drake.baselines import METHODS
-from catgrasp_drake.errors import InputError
+from catgrasp_drake.errors import InputError, one_line
 
 VIEWS = ("full", "single")
 RECORDS_FORMAT = "catgrasp.eval_records"
@@ -142,7 +142,7 @@ def fold_model(config: EvalConfig, fold: int, train: list[str], progress=None) -
         try:
             CategoryModel.load(path, category=config.category)  # checks format, version and checksum
         except (ModelFileError, InputError) as e:
-            raise ModelFileError(f"{str(e).splitlines()[0]} (fold {fold} model; delete it to retrain it)") from None
+            raise ModelFileError(f"{one_line(e, with_type=False)} (fold {fold} model; delete it to retrain it)") from None
         return path
     # the fold models' grasp trials are cached under out_dir too (shared by the folds and categories), so
     # an interrupted evaluation resumes from the same folder whatever the working directory
@@ -321,8 +321,7 @@ def load_records(path: str | Path) -> list[dict]:
     try:
         text = path.read_text(encoding="utf-8")
     except (OSError, ValueError) as e:
-        raise ModelFileError(f"{path}: unreadable evaluation records ({type(e).__name__}: "
-                             f"{str(e).splitlines()[0] if str(e) else ''})") from None
+        raise ModelFileError(f"{path}: unreadable evaluation records ({one_line(e)})") from None
     lines = text.splitlines(keepends=True)
     header = None
     if lines:
@@ -373,8 +372,7 @@ def load_report(path: str | Path) -> dict:
     try:
         data = json.loads(path.read_text(encoding="utf-8"))
     except (OSError, ValueError) as e:
-        raise ModelFileError(f"{path}: unreadable evaluation report ({type(e).__name__}: "
-                             f"{str(e).splitlines()[0] if str(e) else ''})") from None
+        raise ModelFileError(f"{path}: unreadable evaluation report ({one_line(e)})") from None
     if not isinstance(data, dict) or data.get("format") != REPORT_FORMAT:
         raise ModelFileError(f"{path}: not an evaluation report (format {REPORT_FORMAT!r})")
     if data.get("format_version") != FORMAT_VERSION:

@@ -39,7 +39,7 @@ from pathlib import Path
 from typing import Any, Callable, Iterable, Mapping, Sequence
 
 from catgrasp_drake.core.fileio import atomic_write_text
-from catgrasp_drake.errors import InputError
+from catgrasp_drake.errors import InputError, one_line
 
 _PACKAGE_ROOT = Path(__file__).resolve().parent
 
@@ -94,7 +94,7 @@ def _run_one(fn: Callable[[dict], dict], spec: dict) -> dict:
     except (Exception, SystemExit) as e:
         return {
             "status": "error",
-            "error": (f"{type(e).__name__}: {e}".splitlines() or [type(e).__name__])[0][:500],
+            "error": one_line(e, limit=500),
             "traceback": traceback.format_exc(limit=5)[-2000:],
         }
 
@@ -331,5 +331,5 @@ def _run_on_ray(fn, todo: dict, finish, address: str, n_workers: int) -> None:
                 result = ray.get(ref)
             except ray.exceptions.RayError as e:  # the worker died (after Ray's own retries): this task fails
                 result = {"status": "error", "worker_died": True,
-                          "error": (f"{type(e).__name__}: {e}".splitlines() or ["RayError"])[0][:500]}
+                          "error": one_line(e, limit=500)}
             finish(k, result, False)

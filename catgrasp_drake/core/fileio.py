@@ -22,17 +22,9 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from catgrasp_drake.errors import ModelFileError
+from catgrasp_drake.errors import ModelFileError, one_line
 
 _HEADER_KEY = "__header__"
-
-
-def _one_line(e: BaseException) -> str:
-    text = str(e).strip()
-    first = text.splitlines()[0] if text else ""
-    if len(first) > 160:  # e.g. zipfile quoting raw header bytes
-        first = first[:157] + "..."
-    return f"{type(e).__name__}: {first}" if first else type(e).__name__
 
 
 def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> None:
@@ -118,7 +110,7 @@ def load_arrays(
         with np.load(path, allow_pickle=False) as z:
             arrays = {k: z[k] for k in z.files}
     except Exception as e:  # zipfile, zlib, numpy header errors: all mean "corrupt"
-        raise ModelFileError(f"{path}: not a readable {kind} file ({_one_line(e)})") from None
+        raise ModelFileError(f"{path}: not a readable {kind} file ({one_line(e)})") from None
     if _HEADER_KEY not in arrays:
         raise ModelFileError(f"{path}: no header; not a {kind} file")
     try:

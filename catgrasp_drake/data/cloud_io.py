@@ -14,7 +14,7 @@ import numpy as np
 from catgrasp_drake.core.fileio import atomic_write_bytes
 from catgrasp_drake.core.validation import as_points
 from catgrasp_drake.data.open3d_import import import_open3d
-from catgrasp_drake.errors import InputError, ModelFileError
+from catgrasp_drake.errors import InputError, ModelFileError, one_line
 
 SUFFIXES = (".pcd", ".ply", ".npy")
 
@@ -29,11 +29,6 @@ def _suffix(path: Path) -> str:
 _HEADER_BYTES = 1 << 16
 _PLY_SIZES = {"char": 1, "uchar": 1, "int8": 1, "uint8": 1, "short": 2, "ushort": 2, "int16": 2, "uint16": 2,
               "int": 4, "uint": 4, "int32": 4, "uint32": 4, "float": 4, "float32": 4, "double": 8, "float64": 8}
-
-
-def _first_line(e: BaseException) -> str:
-    lines = str(e).strip().splitlines()
-    return f"{type(e).__name__}: {lines[0][:160]}" if lines else type(e).__name__
 
 
 def _too_short(path: Path, n: int, need: int, have: int) -> ModelFileError:
@@ -60,7 +55,7 @@ def _check_declared_size(path: Path, suffix: str) -> None:
                 else:
                     return
             except Exception as e:  # ValueError, SyntaxError, tokenize errors...: a damaged header
-                raise ModelFileError(f"{path}: unreadable .npy file ({_first_line(e)})") from None
+                raise ModelFileError(f"{path}: unreadable .npy file ({one_line(e)})") from None
             if dtype.hasobject:
                 raise ModelFileError(f"{path}: the .npy file holds Python objects (would need pickle); "
                                      "save a numeric (N, 3) array")
@@ -179,7 +174,7 @@ def read_point_cloud(path: str | os.PathLike, *, check_units: bool = True) -> np
         try:
             points = np.load(path, allow_pickle=False)
         except Exception as e:  # ValueError, OSError, EOFError, MemoryError...: a damaged file
-            raise ModelFileError(f"{path}: unreadable .npy file ({_first_line(e)})") from None
+            raise ModelFileError(f"{path}: unreadable .npy file ({one_line(e)})") from None
     else:
         o3d = import_open3d()
         try:

@@ -9,7 +9,7 @@ import numpy as np
 import trimesh
 
 from catgrasp_drake.core.validation import MAX_OBJECT_EXTENT_M
-from catgrasp_drake.errors import InputError, ModelFileError
+from catgrasp_drake.errors import InputError, ModelFileError, one_line
 
 
 def read_mesh(path: str | os.PathLike, *, require_watertight: bool = False) -> trimesh.Trimesh:
@@ -29,8 +29,7 @@ def read_mesh(path: str | os.PathLike, *, require_watertight: bool = False) -> t
     try:
         mesh = trimesh.load(str(path), force="mesh", process=True)
     except Exception as e:  # trimesh raises many types for corrupt files
-        first = str(e).splitlines()[0][:120] if str(e).strip() else ""
-        raise ModelFileError(f"{path}: unreadable mesh ({type(e).__name__}: {first})") from None
+        raise ModelFileError(f"{path}: unreadable mesh ({one_line(e, limit=120)})") from None
     if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
         raise ModelFileError(f"{path}: the file holds no triangles")
     if not np.all(np.isfinite(mesh.vertices)):

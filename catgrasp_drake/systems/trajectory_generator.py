@@ -234,12 +234,17 @@ def _ik_continuous(c: _Ctx, X_WH: RigidTransform, q_prev: np.ndarray, params: Pl
     return best
 
 
-def _collisions(c: _Ctx, q_arm: np.ndarray, margin: float = 0.0) -> list[str]:
-    """Pairs "A vs B" (frame names) of unfiltered geometries closer than ``margin`` at ``q_arm``."""
+def _query_at(c: _Ctx, q_arm: np.ndarray):
+    """SceneGraph's query object with the arm at ``q_arm`` and everything else at ``c.q_full``."""
     q = c.q_full.copy()
     q[c.arm_q_idx] = q_arm
     c.plant.SetPositions(c.plant_context, q)
-    query = c.scene_graph.get_query_output_port().Eval(c.sg_context)
+    return c.scene_graph.get_query_output_port().Eval(c.sg_context)
+
+
+def _collisions(c: _Ctx, q_arm: np.ndarray, margin: float = 0.0) -> list[str]:
+    """Pairs "A vs B" (frame names) of unfiltered geometries closer than ``margin`` at ``q_arm``."""
+    query = _query_at(c, q_arm)
     inspector = query.inspector()
     out = []
     for pair in query.ComputeSignedDistancePairwiseClosestPoints(max(margin, 0.0) + 1e-4):
@@ -251,10 +256,7 @@ def _collisions(c: _Ctx, q_arm: np.ndarray, margin: float = 0.0) -> list[str]:
 
 def _min_distance(c: _Ctx, q_arm: np.ndarray, cap: float) -> float:
     """Smallest distance (m) between unfiltered geometries at ``q_arm``, or ``cap`` if all are farther."""
-    q = c.q_full.copy()
-    q[c.arm_q_idx] = q_arm
-    c.plant.SetPositions(c.plant_context, q)
-    query = c.scene_graph.get_query_output_port().Eval(c.sg_context)
+    query = _query_at(c, q_arm)
     return min([cap] + [pair.distance for pair in query.ComputeSignedDistancePairwiseClosestPoints(cap)])
 
 
@@ -293,9 +295,8 @@ def _table_raise(c: _Ctx, poses_WH: list[RigidTransform], clearance: float) -> f
     The hand's collision primitives are carried rigidly with frame H; the
     table top is the highest point of the table's geometry.
     """
-    plant, inspector = c.plant, c.scene_graph.model_inspector()
-    plant.SetPositions(c.plant_context, c.q_full)
-    query = c.scene_graph.get_query_output_port().Eval(c.sg_context)
+    inspector = c.scene_graph.model_inspector()
+    query = _query_at(c, c.q_full[c.arm_q_idx])
     X_HW = c.frame_H.CalcPoseInWorld(c.plant_context).inverse().GetAsMatrix4()
     table_top = -np.inf
     for g in c.table_ids:
@@ -317,6 +318,11 @@ def _table_raise(c: _Ctx, poses_WH: list[RigidTransform], clearance: float) -> f
     return max(0.0, table_top + clearance - lowest) if np.isfinite(lowest) else 0.0
 
 
+#: Joint offset (rad, ARM_JOINTS order) from the start that lifts the shoulder and bends the elbow:
+#: a pregrasp IK seed, and the first knot of approaches that must clear the table.
+ELBOW_RAISED = np.array([0.0, -0.4, 0.6, -0.2, 0.0, 0.0])
+
+
 def _pregrasp_seeds(q_start: np.ndarray, params: PlanParams):
     """(min_distance, wrist_up, seed) of the pregrasp IK attempts, in order.
 
@@ -325,11 +331,10 @@ def _pregrasp_seeds(q_start: np.ndarray, params: PlanParams):
     seed can be stuck on the branch that lays the forearm on the table, or twists the wrist under a
     hand working low); then random restarts about the start (fixed seed: deterministic).
     """
-    lift = np.array([0.0, -0.4, 0.6, -0.2, 0.0, 0.0])
     flip = np.array([0.0, 0.0, 0.0, 0.0, 0.85 * np.pi, 1.5 * np.pi])
     for wrist_up, min_distance in ((True, None), (True, params.min_distance), (False, None),
                                    (False, params.min_distance)):
-        for seed in (q_start, q_start + lift, q_start + lift + flip):
+        for seed in (q_start, q_start + ELBOW_RAISED, q_start + ELBOW_RAISED + flip):
             yield min_distance, wrist_up, seed
     rng = np.random.default_rng(20181)
     for _ in range(params.pregrasp_restarts):
@@ -361,7 +366,7 @@ def _approach_candidates(c: _Ctx, X_WPre: RigidTransform, q_start: np.ndarray, q
         if ok:
             vias.append(q_via)
             yield [q_via, q_pre]
-    q_raised = q_start + np.array([0.0, -0.4, 0.6, -0.2, 0.0, 0.0])  # shoulder up, elbow bent
+    q_raised = q_start + ELBOW_RAISED
     yield [q_raised, q_pre]
     for q_via in vias:
         yield [q_raised, q_via, q_pre]
@@ -433,7 +438,7 @@ def plan_grasp(plant: MultibodyPlant, plant_context, scene_graph, sg_context, *,
 
     # --- pregrasp and the approach to it: the first collision-free pregrasp IK solution (in the order of
     # _pregrasp_seeds) that an approach path from the start reaches without meeting the table or object
-    attempts = []  # (ok, q_pre) of every IK solved
+    attempts = []  # (collision-free, q_pre) of every distinct IK solution
     q_pre_arm = approach_knots = None
     for min_distance, wrist_up, seed in _pregrasp_seeds(q_arm_start, params):
         ok, q = _ik(c, X["pregrasp"], seed, params, min_distance=min_distance, wrist_up=wrist_up)
