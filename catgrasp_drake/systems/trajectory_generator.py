@@ -5,8 +5,9 @@ with Drake's ``InverseKinematics`` (SNOPT when available) on the station's
 plant and a scratch context of the station diagram:
 
 - table clearance: the pregrasp and grasp poses are raised (by at most
-  ``max_table_raise``) until the preshaped hand's collision primitives are
-  ``table_clearance`` above the table top;
+  ``max_table_raise``) until the preshaped hand's collision primitives and
+  the wrist flange it is mounted on are ``table_clearance`` above the table
+  top;
 - ``home -> pregrasp``: joint-space cubic from the arm's start configuration
   to an IK solution of the pregrasp pose. IK seeds are tried in a fixed
   order (structured seeds, then ``pregrasp_restarts`` seeded random ones);
@@ -160,7 +161,7 @@ class _Ctx:
     frame_wrist: object  # body frame of the arm's wrist-1 link
     q_full: np.ndarray  # the fixed configuration of everything but the arm
     robot_geoms: GeometrySet
-    hand_ids: list  # proximity geometry ids of the hand
+    carried_ids: list  # proximity geometry ids rigid with H: the hand's (in q_full) and the arm's last link
     object_geoms: GeometrySet
     table_geoms: GeometrySet
     table_ids: list
@@ -178,6 +179,12 @@ def _geometry_ids(plant: MultibodyPlant, scene_graph, instances) -> list:
                 continue
             ids += list(inspector.GetGeometries(fid, Role.kProximity))
     return ids
+
+
+def _body_geometry_ids(scene_graph, body) -> list:
+    """Proximity geometry ids of one body (its frame may carry none)."""
+    fid = body.GetParentPlant().GetBodyFrameIdIfExists(body.index())
+    return [] if fid is None else list(scene_graph.model_inspector().GetGeometries(fid, Role.kProximity))
 
 
 def _geometry_set(plant: MultibodyPlant, scene_graph, instances) -> GeometrySet:
@@ -292,7 +299,8 @@ def _lowest_point_z(shape, X_WG: np.ndarray) -> float | None:
 def _table_raise(c: _Ctx, poses_WH: list[RigidTransform], clearance: float) -> float:
     """Height (m, >= 0) to raise the hand poses by so that the hand (in ``c.q_full``'s posture) clears the table.
 
-    The hand's collision primitives are carried rigidly with frame H; the
+    The hand's collision primitives and the arm's last link (the wrist
+    flange the hand is mounted on) are carried rigidly with frame H; the
     table top is the highest point of the table's geometry.
     """
     inspector = c.scene_graph.model_inspector()
@@ -307,7 +315,7 @@ def _table_raise(c: _Ctx, poses_WH: list[RigidTransform], clearance: float) -> f
     if not np.isfinite(table_top):
         return 0.0
     hand = [(inspector.GetShape(g), X_HW @ query.GetPoseInWorld(g).GetAsMatrix4())
-            for g in c.hand_ids]
+            for g in c.carried_ids]
     lowest = np.inf
     for X_WH in poses_WH:
         M = X_WH.GetAsMatrix4()
@@ -417,7 +425,8 @@ def plan_grasp(plant: MultibodyPlant, plant_context, scene_graph, sg_context, *,
     object_instances = [object_instance] if object_instance is not None else []
     c = _Ctx(plant, plant_context, sg_context, scene_graph, arm_q_idx, hand_q_idx, frame_H, frame_wrist, q_full,
              robot_geoms=_geometry_set(plant, scene_graph, [arm, hand]),
-             hand_ids=_geometry_ids(plant, scene_graph, [hand]),
+             carried_ids=_geometry_ids(plant, scene_graph, [hand]) + _body_geometry_ids(
+                 scene_graph, plant.GetJointByName(ARM_JOINTS[-1], arm).child_body()),
              object_geoms=_geometry_set(plant, scene_graph, object_instances),
              table_geoms=_geometry_set(plant, scene_graph, [table]),
              table_ids=_geometry_ids(plant, scene_graph, [table]), shoulder_W=shoulder_W)

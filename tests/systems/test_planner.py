@@ -56,10 +56,14 @@ def _distances_to_table(planning, q_arm, q_hand) -> dict[str, float]:
     return out
 
 
+#: what the hand carries rigidly: its own links and the arm's last link (the wrist flange)
+CARRIED = ("svh::", "ur10::ur10_wrist_3_link")
+
+
 def _hand_clearance(planning, plan, knot: str) -> float:
     i = plan.knot_names.index(knot)
     d = _distances_to_table(planning, plan.q_arm[i], plan.q_hand[i])
-    return min(v for k, v in d.items() if k.startswith("svh::"))
+    return min(v for k, v in d.items() if k.startswith(CARRIED))
 
 
 def test_a_grasp_slightly_too_low_is_raised_to_the_table_clearance(drill):
@@ -75,6 +79,37 @@ def test_a_grasp_slightly_too_low_is_raised_to_the_table_clearance(drill):
     clearance = _hand_clearance(planning, plan, "grasp")
     # raised to the clearance (the primitives' lowest point vs Drake's distance: within 1 mm)
     assert clearance == pytest.approx(params.table_clearance, abs=1e-3)
+
+
+def _pitched_up(motion: GraspMotion, angle: float) -> GraspMotion:
+    """``motion`` turned by ``angle`` (rad) about the grasp point so the fingers point up and the wrist down."""
+    X_g = motion.pose("grasp")
+    axis = np.cross(X_g[:3, 2], [0.0, 0.0, 1.0])
+    axis /= np.linalg.norm(axis)
+    K = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    R = np.eye(3) + np.sin(angle) * K + (1 - np.cos(angle)) * K @ K
+    poses = motion.poses.copy()
+    for X in poses:
+        X[:3, :3] = R @ X[:3, :3]
+        X[:3, 3] = R @ (X[:3, 3] - X_g[:3, 3]) + X_g[:3, 3]
+    return dataclasses.replace(motion, poses=poses)
+
+
+def test_the_wrist_flange_is_raised_over_the_table_with_the_hand(drill):
+    """Fingers pointing up put the wrist's last link lowest: it, not the hand, sets the raise."""
+    planning, motion_W = drill
+    params = PlanParams()
+    tilted = _shifted(_pitched_up(motion_W, np.radians(35.0)), 0.08)
+    reference = planning.plan(tilted, params)
+    assert reference.ok, reference.status
+    i = reference.knot_names.index("grasp")
+    d = _distances_to_table(planning, reference.q_arm[i], reference.q_hand[i])
+    assert d["ur10::ur10_wrist_3_link"] < min(v for k, v in d.items() if k.startswith("svh::"))
+    low = _shifted(tilted, -(d["ur10::ur10_wrist_3_link"] + 0.006))  # wrist 6 mm INTO the table
+    plan = planning.plan(low, params)
+    assert plan.ok, plan.status
+    d = _distances_to_table(planning, plan.q_arm[i], plan.q_hand[i])
+    assert d["ur10::ur10_wrist_3_link"] == pytest.approx(params.table_clearance, abs=1e-3)
 
 
 def test_a_grasp_far_below_the_table_is_refused(drill):
