@@ -2,12 +2,16 @@
 
     python diagrams/handwritten_sweep.py [--categories drill spray_bottle mug] [--workers 2]
                                          [--cache out/handwritten_sweep_cache] [--json out/handwritten_sweep.json]
+                                         [--shift DX DY DZ] [--rotate RX RY RZ]
 
 Each trial uses the category's default scenario (``<category>_default`` in
 ``models/station.scenarios.yaml``) with the object replaced by the instance,
 and the hand-written grasp ``models/grasps/<category>_handwritten.yaml``
 anchored to the instance's annotated region (``load_handwritten_motion``).
-Trials run in parallel worker processes through
+``--shift`` (m) and ``--rotate`` (deg, object-frame x-y-z Euler angles about
+the anchor region's centre) move the whole grasp in the object frame: the way
+to try a change to a hand-written grasp, and to see how far off a predicted
+grasp may land before it fails. Trials run in parallel worker processes through
 :func:`catgrasp_drake.runner.run_tasks` and are cached on disk by (spec, code
 fingerprint), so a re-run only computes what changed. Prints one table row
 per instance (grasp, functional, failure reason) and a summary per category.
@@ -34,13 +38,32 @@ def sweep_task(spec: dict) -> dict:
     category, instance = spec["category"], spec["instance"]
     base = load_scenario(f"{category}_default")
     scenario = replace(base, name=f"{category}_default:{instance}", object=replace(base.object, instance=instance))
-    r = run_grasp_trial(scenario, load_handwritten_motion(category, instance))
+    motion = load_handwritten_motion(category, instance)
+    if spec.get("shift") or spec.get("rotate"):
+        motion = varied(motion, category, instance, spec.get("shift") or (0, 0, 0), spec.get("rotate") or (0, 0, 0))
+    r = run_grasp_trial(scenario, motion)
     return {
         "grasp": r.grasp_success, "functional": r.functional_success, "reason": r.failure_reason,
         "detail": r.detail, "plan_status": r.plan_status, "rise_m": r.object_rise_m,
         "tilt_deg": r.object_tilt_deg, "hand_links": list(r.hand_links_on_object),
         "sim_time_s": r.sim_time_s, "wall_time_s": r.wall_time_s,
     }
+
+
+def varied(motion, category: str, instance: str, shift_O, rotate_deg):
+    """``motion`` (object frame) turned by x-y-z Euler angles ``rotate_deg`` about the centre of the
+    grasp's anchor region (the trigger or handle), then moved by ``shift_O`` (m)."""
+    import numpy as np
+    from scipy.spatial.transform import Rotation
+
+    from catgrasp_drake.data.dataset import load_annotations
+    from catgrasp_drake.grasping.constraints import load_constraint
+
+    pivot = np.asarray(load_annotations(category, instance)["regions"][load_constraint(category).region]["center"])
+    M = np.eye(4)
+    M[:3, :3] = Rotation.from_euler("xyz", rotate_deg, degrees=True).as_matrix()
+    M[:3, 3] = pivot - M[:3, :3] @ pivot + np.asarray(shift_O, float)
+    return replace(motion, poses=M @ motion.poses)
 
 
 def code_version() -> str:
@@ -61,9 +84,14 @@ def main(argv=None) -> int:
     ap.add_argument("--cache", type=Path, default=ROOT / "out" / "handwritten_sweep_cache")
     ap.add_argument("--no-cache", action="store_true")
     ap.add_argument("--json", type=Path, default=ROOT / "out" / "handwritten_sweep.json")
+    ap.add_argument("--shift", type=float, nargs=3, metavar=("DX", "DY", "DZ"),
+                    help="move every grasp by this (m, object frame)")
+    ap.add_argument("--rotate", type=float, nargs=3, metavar=("RX", "RY", "RZ"),
+                    help="turn every grasp about its anchor region's centre (deg, object-frame x-y-z Euler angles)")
     args = ap.parse_args(argv)
 
-    specs = [{"category": c, "instance": i} for c in args.categories for i in list_instances(c)
+    variant = {k: list(v) for k, v in (("shift", args.shift), ("rotate", args.rotate)) if v and any(v)}
+    specs = [{"category": c, "instance": i, **variant} for c in args.categories for i in list_instances(c)
              if not args.instances or i in args.instances]
 
     def progress(outcome, done, total):
