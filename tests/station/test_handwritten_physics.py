@@ -51,6 +51,19 @@ def test_handwritten_spray_bottle_grasp_is_functional():
 
 
 @pytest.mark.slow
+@pytest.mark.parametrize("category, instance", [("spray_bottle", "spray_bottle_03"), ("drill", "drill_02")])
+def test_handwritten_grasp_holds_instances_the_upright_palm_knocked_over(category, instance):
+    """Before session 4 the palm stood upright beside the handle/neck: closing fingers pushed these two
+    over backwards (tilt 65-90 deg, not lifted). The rolled palm, set further back, holds them."""
+    from catgrasp_drake.station.scenario import with_instance
+
+    scenario = with_instance(load_scenario(f"{category}_default"), instance)
+    r = run_grasp_trial(scenario, load_handwritten_motion(category, instance))
+    assert r.functional_success, f"{r.failure_reason}: {r.detail}"
+    assert r.object_tilt_deg < 15.0
+
+
+@pytest.mark.slow
 def test_handwritten_spray_bottle_grasp_lifts_and_holds():
     r = _trial("spray_bottle_default")
     assert r.grasp_success, f"{r.failure_reason}: {r.detail}"
