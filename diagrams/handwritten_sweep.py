@@ -58,12 +58,13 @@ def varied(motion, category: str, instance: str, shift_O, rotate_deg):
 
     from catgrasp_drake.data.dataset import load_annotations
     from catgrasp_drake.grasping.constraints import load_constraint
+    from catgrasp_drake.grasping.sampling import perturb_poses
 
     pivot = np.asarray(load_annotations(category, instance)["regions"][load_constraint(category).region]["center"])
-    M = np.eye(4)
-    M[:3, :3] = Rotation.from_euler("xyz", rotate_deg, degrees=True).as_matrix()
-    M[:3, 3] = pivot - M[:3, :3] @ pivot + np.asarray(shift_O, float)
-    return replace(motion, poses=M @ motion.poses)
+    T = np.eye(4)
+    T[:3, :3] = Rotation.from_euler("xyz", rotate_deg, degrees=True).as_matrix()
+    T[:3, 3] = shift_O
+    return replace(motion, poses=perturb_poses(motion.poses, T, pivot))
 
 
 def code_version() -> str:

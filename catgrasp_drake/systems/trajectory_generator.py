@@ -170,15 +170,8 @@ class _Ctx:
 
 def _geometry_ids(plant: MultibodyPlant, scene_graph, instances) -> list:
     """Proximity geometry ids of every body of the model ``instances``."""
-    inspector = scene_graph.model_inspector()
-    ids = []
-    for inst in instances:
-        for bi in plant.GetBodyIndices(inst):
-            fid = plant.GetBodyFrameIdIfExists(bi)
-            if fid is None:
-                continue
-            ids += list(inspector.GetGeometries(fid, Role.kProximity))
-    return ids
+    return [g for inst in instances for bi in plant.GetBodyIndices(inst)
+            for g in _body_geometry_ids(scene_graph, plant.get_body(bi))]
 
 
 def _body_geometry_ids(scene_graph, body) -> list:

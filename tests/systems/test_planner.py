@@ -12,8 +12,10 @@ import dataclasses
 
 import numpy as np
 import pytest
+from scipy.spatial.transform import Rotation
 
 from catgrasp_drake.grasping.motion import GraspMotion
+from catgrasp_drake.grasping.sampling import perturb_poses
 from catgrasp_drake.robot.models import ARM_JOINTS
 from catgrasp_drake.station.builder import hand_joint_angles, make_planning_model
 from catgrasp_drake.station.handwritten import load_handwritten_motion
@@ -85,14 +87,9 @@ def _pitched_up(motion: GraspMotion, angle: float) -> GraspMotion:
     """``motion`` turned by ``angle`` (rad) about the grasp point so the fingers point up and the wrist down."""
     X_g = motion.pose("grasp")
     axis = np.cross(X_g[:3, 2], [0.0, 0.0, 1.0])
-    axis /= np.linalg.norm(axis)
-    K = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
-    R = np.eye(3) + np.sin(angle) * K + (1 - np.cos(angle)) * K @ K
-    poses = motion.poses.copy()
-    for X in poses:
-        X[:3, :3] = R @ X[:3, :3]
-        X[:3, 3] = R @ (X[:3, 3] - X_g[:3, 3]) + X_g[:3, 3]
-    return dataclasses.replace(motion, poses=poses)
+    T = np.eye(4)
+    T[:3, :3] = Rotation.from_rotvec(angle * axis / np.linalg.norm(axis)).as_matrix()
+    return dataclasses.replace(motion, poses=perturb_poses(motion.poses, T, X_g[:3, 3]))
 
 
 def test_the_wrist_flange_is_raised_over_the_table_with_the_hand(drill):
