@@ -47,6 +47,8 @@ def sweep_task(spec: dict) -> dict:
         "detail": r.detail, "plan_status": r.plan_status, "rise_m": r.object_rise_m,
         "tilt_deg": r.object_tilt_deg, "hand_links": list(r.hand_links_on_object),
         "sim_time_s": r.sim_time_s, "wall_time_s": r.wall_time_s,
+        "trigger_force_N": r.trigger_force_N, "in_hand_shift_m": r.in_hand_shift_m,
+        "in_hand_turn_deg": r.in_hand_turn_deg,
     }
 
 
@@ -65,6 +67,11 @@ def varied(motion, category: str, instance: str, shift_O, rotate_deg):
     T[:3, :3] = Rotation.from_euler("xyz", rotate_deg, degrees=True).as_matrix()
     T[:3, 3] = shift_O
     return replace(motion, poses=perturb_poses(motion.poses, T, pivot))
+
+
+def _fmt(value, width: int, digits: int, scale: float = 1.0) -> str:
+    """``value * scale`` right-aligned, or "-" when it was not measured (None)."""
+    return f"{'-':>{width}s}" if value is None else f"{value * scale:{width}.{digits}f}"
 
 
 def code_version() -> str:
@@ -112,13 +119,16 @@ def main(argv=None) -> int:
         sel = [r for r in rows if r["category"] == c]
         if not sel:
             continue
-        out.write(f"\n{c}\n{'instance':18s} {'grasp':6s} {'functional':10s} {'reason':26s} {'rise(m)':>8s} {'tilt':>6s} {'wall(s)':>7s}\n")
+        out.write(f"\n{c}\n{'instance':18s} {'grasp':6s} {'functional':10s} {'reason':26s} {'rise(m)':>8s} {'tilt':>6s} "
+                  f"{'F_trig(N)':>9s} {'shift(mm)':>9s} {'turn':>5s} {'wall(s)':>7s}\n")
         for r in sel:
             if r.get("status") == "error":
                 out.write(f"{r['instance']:18s} {'-':6s} {'-':10s} error: {r['error'][:60]}\n")
                 continue
             out.write(f"{r['instance']:18s} {str(r['grasp']):6s} {str(r['functional']):10s} "
-                      f"{(r['reason'] or '-'):26s} {r['rise_m']:8.3f} {r['tilt_deg']:6.1f} {r['wall_time_s']:7.1f}\n")
+                      f"{(r['reason'] or '-'):26s} {r['rise_m']:8.3f} {r['tilt_deg']:6.1f} "
+                      f"{_fmt(r.get('trigger_force_N'), 9, 1)} {_fmt(r.get('in_hand_shift_m'), 9, 1, 1000)} "
+                      f"{_fmt(r.get('in_hand_turn_deg'), 5, 1)} {r['wall_time_s']:7.1f}\n")
         n = len(sel)
         g = sum(bool(r.get("grasp")) for r in sel)
         f = sum(bool(r.get("functional")) for r in sel)

@@ -84,7 +84,9 @@ class YcbObject:
     xyz_m: tuple[float, float, float]     # translation of X_canonical_ycb in metres
     mass_kg: float                 # YCB published mass
     functional: bool               # has the category's functional part
-    regions: dict = field(default_factory=dict)   # hand-annotated boxes, canonical frame
+    # hand-annotated boxes, canonical frame; "grown_by": how much the box was grown around the part (m),
+    # read by the success judge (catgrasp_drake.station.judge.region_grown_by)
+    regions: dict = field(default_factory=dict)
     note: str = ""
 
 
@@ -105,7 +107,8 @@ YCB_OBJECTS: dict[str, YcbObject] = {o.name: o for o in (
         # trigger: the switch protruding in front of the handle under the motor body
         # (scan surface x -0.010..0.014, y 0.028..0.048, z 0.096..0.125), from the
         # handle front (y 0.024) with ~3 mm margin, as the embedded drills' trigger boxes.
-        regions={"trigger": {"center": [0.002, 0.037, 0.110], "half_extents": [0.014, 0.013, 0.018]}},
+        regions={"trigger": {"center": [0.002, 0.037, 0.110], "half_extents": [0.014, 0.013, 0.018],
+                          "grown_by": 0.003}},
         note="cordless drill with battery; trigger under the motor body, front of the handle",
     ),
     YcbObject(
@@ -120,7 +123,8 @@ YCB_OBJECTS: dict[str, YcbObject] = {o.name: o for o in (
         # trigger: the lever hanging under the head in front of the neck (scan surface
         # x -0.011..0.008, y 0.026..0.050, z 0.215..0.245), below the head's
         # underside only, ~3 mm margin, as the embedded spray bottles' trigger boxes.
-        regions={"trigger": {"center": [-0.001, 0.039, 0.2285], "half_extents": [0.013, 0.013, 0.0175]}},
+        regions={"trigger": {"center": [-0.001, 0.039, 0.2285], "half_extents": [0.013, 0.013, 0.0175],
+                          "grown_by": 0.003}},
         note="the scan misses the neck: head and body are separate closed pieces (gap z 0.19-0.205 m)",
     ),
     YcbObject(
@@ -156,7 +160,8 @@ YCB_OBJECTS: dict[str, YcbObject] = {o.name: o for o in (
         functional=True,
         # handle: the loop from the cup wall (r = 0.041) outward (scan surface
         # x -0.007..0.007, y to 0.070, z 0.013..0.069), ~3 mm margin, as the embedded mugs.
-        regions={"handle": {"center": [0.0, 0.0572, 0.041], "half_extents": [0.0104, 0.0162, 0.031]}},
+        regions={"handle": {"center": [0.0, 0.0572, 0.041], "half_extents": [0.0104, 0.0162, 0.031],
+                          "grown_by": 0.003}},
         note="thin-walled enamel-style mug with a loop handle",
     ),
 )}

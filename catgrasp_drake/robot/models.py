@@ -69,6 +69,8 @@ FINGER_DISTAL_LINKS: dict[str, str] = {
 }
 #: The link that must touch a trigger in a functional grasp.
 INDEX_DISTAL_LINK = FINGER_DISTAL_LINKS["index"]
+#: The index finger's actuated joints (proximal, distal): closed further to press a trigger.
+INDEX_ACTUATED_JOINTS: tuple[str, ...] = ("svh_index_proximal", "svh_index_distal")
 #: Links of the thumb (any contact of these counts as "thumb contact").
 THUMB_LINKS: tuple[str, ...] = (
     "svh_thumb_base_link",

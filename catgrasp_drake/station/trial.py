@@ -1,4 +1,4 @@
-"""One grasp trial: plan, simulate approach -> reach -> close -> lift -> hold, judge.
+"""One grasp trial: plan, simulate approach -> reach -> close -> lift -> hold -> shake -> press, judge.
 
 ``run_grasp_trial(scenario, motion_O)`` places the object with the
 scenario's pose, expresses the motion (object frame) in the world, plans it
@@ -61,11 +61,15 @@ class TrialResult:
     X_WO_final: tuple  # 4x4 as nested tuples
     object_rise_m: float
     object_tilt_deg: float
-    contacts_end: tuple  # ((body_a, body_b), ...) sorted, at the end of the hold
-    hand_links_on_object: tuple  # hand links touching the object at the end of the hold
+    contacts_end: tuple  # ((body_a, body_b), ...) sorted, at the end of the trial (after the press)
+    hand_links_on_object: tuple  # hand links touching the object at the end of the trial
     sim_time_s: float
     wall_time_s: float
     plan_time_s: float
+    # what the judge measured (None: not measured, e.g. no plan, no trigger contact)
+    trigger_force_N: float | None = None  # index distal on the trigger, along its travel, end of the press
+    in_hand_shift_m: float | None = None  # largest object motion relative to the hand (vs start of the hold)
+    in_hand_turn_deg: float | None = None
 
     @property
     def realtime_rate(self) -> float:
@@ -90,7 +94,12 @@ def _body_name(plant, body) -> str:
 
 
 def contacts_from_results(plant, inspector, results) -> tuple[ContactRecord, ...]:
-    """ContactRecords (sorted by body names) from a ``ContactResults`` value."""
+    """ContactRecords (sorted by body names) from a ``ContactResults`` value.
+
+    ``force_on_a_W`` is the contact force on ``body_a`` (hydroelastic: the
+    translational part of ``F_Ac_W``, the spatial force on body A at the patch
+    centroid; point pair: minus ``contact_force()``, which is on body B).
+    """
     out = []
     for i in range(results.num_hydroelastic_contacts()):
         info = results.hydroelastic_contact_info(i)
@@ -102,21 +111,19 @@ def contacts_from_results(plant, inspector, results) -> tuple[ContactRecord, ...
         idx = np.linspace(0, n - 1, min(n, MAX_POINTS_PER_PATCH - 1)).astype(int) if n else []
         pts = [tuple(np.asarray(s.centroid(), float))] + [tuple(np.asarray(mesh.element_centroid(int(e)), float))
                                                           for e in idx]
-        force = float(np.linalg.norm(info.F_Ac_W().translational()))
-        out.append(ContactRecord(_body_name(plant, a), _body_name(plant, b), tuple(pts), force, "hydroelastic"))
+        f_A = np.asarray(info.F_Ac_W().translational(), float)  # on body A (geometry M's body)
+        out.append(ContactRecord(_body_name(plant, a), _body_name(plant, b), tuple(pts), float(np.linalg.norm(f_A)),
+                                 "hydroelastic", tuple(f_A)))
     for i in range(results.num_point_pair_contacts()):
         info = results.point_pair_contact_info(i)
         a = plant.get_body(info.bodyA_index())
         b = plant.get_body(info.bodyB_index())
+        f_B = np.asarray(info.contact_force(), float)  # on body B
         out.append(ContactRecord(_body_name(plant, a), _body_name(plant, b),
                                  (tuple(np.asarray(info.contact_point(), float)),),
-                                 float(np.linalg.norm(info.contact_force())), "point"))
-    # one orientation per pair, deterministic order
-    norm = []
-    for c in out:
-        if c.body_b < c.body_a:
-            c = ContactRecord(c.body_b, c.body_a, c.points_W, c.force_N, c.kind)
-        norm.append(c)
+                                 float(np.linalg.norm(f_B)), "point", tuple(-f_B)))
+    # one orientation per pair (the force vector stays on its body), deterministic order
+    norm = [c.swapped() if c.body_b < c.body_a else c for c in out]
     return tuple(sorted(norm, key=lambda c: (c.body_a, c.body_b, c.kind, -c.force_N)))
 
 
@@ -199,12 +206,20 @@ def plan_for(td: TrialDiagram, motion_W: GraspMotion, params: PlanParams = PlanP
 
 # ----------------------------------------------------------------------------- the trial
 def station_snapshot(h: StationHandles, context) -> Snapshot:
-    """The object's pose and all contacts in the root ``context`` of a diagram holding station ``h``."""
+    """The object's pose, the hand base pose and all contacts in the root ``context`` of a diagram holding ``h``."""
+    from catgrasp_drake.robot.models import HAND_BASE_LINK
+
     plant_ctx = h.plant.GetMyContextFromRoot(context)
     X_WO = h.plant.EvalBodyPoseInWorld(plant_ctx, h.object_body).GetAsMatrix4()
+    X_WH = h.plant.EvalBodyPoseInWorld(plant_ctx, h.plant.GetBodyByName(HAND_BASE_LINK, h.hand)).GetAsMatrix4()
     results = h.plant.get_contact_results_output_port().Eval(plant_ctx)
     contacts = contacts_from_results(h.plant, h.scene_graph.model_inspector(), results)
-    return Snapshot(context.get_time(), X_WO, contacts)
+    return Snapshot(context.get_time(), X_WO, contacts, X_WH)
+
+
+def _finite_or_none(value: float, digits: int = 6) -> float | None:
+    """``value`` rounded, or None for nan (keeps ``TrialResult.outcome()`` comparable and JSON-clean)."""
+    return round(float(value), digits) if np.isfinite(value) else None
 
 
 def _as_tuple(X: np.ndarray) -> tuple:
@@ -245,7 +260,10 @@ def run_grasp_trial(scenario: Scenario, motion_O: GraspMotion, *, meshcat: Meshc
             timeline=plan.timeline.as_dict(), X_WO_initial=_as_tuple(X_WO0), X_WO_final=_as_tuple(X_final),
             object_rise_m=round(verdict.object_rise_m, 9), object_tilt_deg=round(verdict.tilt_deg, 6),
             contacts_end=pairs, hand_links_on_object=hand_links, sim_time_s=sim_time,
-            wall_time_s=time.perf_counter() - wall0, plan_time_s=plan.solve_time_s)
+            wall_time_s=time.perf_counter() - wall0, plan_time_s=plan.solve_time_s,
+            trigger_force_N=_finite_or_none(verdict.trigger_force_N),
+            in_hand_shift_m=_finite_or_none(verdict.in_hand_shift_m),
+            in_hand_turn_deg=_finite_or_none(verdict.in_hand_turn_deg))
 
     if not plan.ok:
         reason = "collision_before_closing" if plan.failure_kind == "collision" else "unreachable"
@@ -271,7 +289,9 @@ def simulate_and_judge(diagram, context, station: StationHandles, timeline, spec
     """Simulate ``diagram`` from ``context`` to ``timeline.end`` and judge the grasp.
 
     Snapshots are taken at the start, at ``timeline.close``, ``timeline.hold``
-    and ``timeline.end``. A solver failure inside the plant becomes a
+    (end of the lift), ``timeline.shake`` (end of the hold),
+    ``timeline.press`` (end of the shake) and ``timeline.end`` (end of the
+    press). A solver failure inside the plant becomes a
     ``simulation_error`` verdict, never an exception. With the station's
     Meshcat visualizer the run is recorded (and written to ``record_html``).
     Past ``max_wall_s`` seconds of wall-clock time the run stops with a
@@ -300,10 +320,11 @@ def simulate_and_judge(diagram, context, station: StationHandles, timeline, spec
         initial = station_snapshot(station, context)
         simulator.AdvanceTo(timeline.close)
         before_close = station_snapshot(station, context)
-        simulator.AdvanceTo(timeline.hold)
-        after_lift = station_snapshot(station, context)
-        simulator.AdvanceTo(timeline.end)
-        end = station_snapshot(station, context)
+        snapshots = []
+        for t in (timeline.hold, timeline.shake, timeline.press, timeline.end):
+            simulator.AdvanceTo(max(float(t), context.get_time()))
+            snapshots.append(station_snapshot(station, context))
+        after_lift, after_hold, after_shake, end = snapshots
     except RuntimeError as e:  # a solver failure inside the plant: report, never raise
         X = station.plant.EvalBodyPoseInWorld(station.plant.GetMyContextFromRoot(context),
                                               station.object_body).GetAsMatrix4()
@@ -316,4 +337,5 @@ def simulate_and_judge(diagram, context, station: StationHandles, timeline, spec
             visualizer.PublishRecording()
             if record_html is not None and meshcat is not None:
                 atomic_write_text(record_html, meshcat.StaticHtml())
-    return judge(spec, initial, before_close, after_lift, end), end.X_WO, end, context.get_time()
+    verdict = judge(spec, initial, before_close, after_lift, after_hold, after_shake, end)
+    return verdict, end.X_WO, end, context.get_time()

@@ -131,3 +131,67 @@ def test_the_executed_approach_keeps_the_robot_off_the_table(drill):
         worst = min([worst] + list(d.values()))
     assert worst > 0.0
     assert i_pre > 0
+
+
+def _hand_pose(planning, q_arm) -> np.ndarray:
+    """X_WH (4x4) of the hand base at arm configuration ``q_arm`` (forward kinematics)."""
+    from catgrasp_drake.robot.models import HAND_BASE_LINK
+
+    plant = planning.plant
+    pc = plant.GetMyMutableContextFromRoot(planning.diagram.CreateDefaultContext())
+    for name, q in zip(ARM_JOINTS, q_arm):
+        plant.GetJointByName(name, planning.arm).set_angle(pc, q)
+    return plant.EvalBodyPoseInWorld(pc, plant.GetBodyByName(HAND_BASE_LINK, planning.hand)).GetAsMatrix4()
+
+
+def test_the_shake_moves_the_hand_base_vertically_with_its_orientation_fixed(drill):
+    """The disturbance after the hold: the hand base goes up and down sinusoidally, ±a / (2 pi f)^2 =
+    ±1.27 cm about its mean along world z, from rest to rest, peak acceleration ~2 m/s^2 (forward
+    kinematics on the plan's knots and on the executed cubic); no turning, no sideways motion."""
+    from catgrasp_drake.robot.models import HAND_ACTUATED_JOINTS
+    from catgrasp_drake.station.judge import rotation_deg
+    from catgrasp_drake.systems.trajectory_generator import PHASES, shake_amplitude
+
+    planning, motion_W = drill
+    params = PlanParams()
+    plan = planning.plan(motion_W, params)
+    assert plan.ok, plan.status
+    tl = plan.timeline
+    assert PHASES[-1] == "end" and tl.hold < tl.shake < tl.press < tl.end
+    assert tl.shake - tl.hold == pytest.approx(motion_W.hold_time + params.hold_margin)
+    assert tl.press - tl.shake == pytest.approx(1.0) and tl.end - tl.press == pytest.approx(0.5)
+    amplitude = shake_amplitude(params)
+    assert amplitude == pytest.approx(2.0 / (2 * np.pi * 2.0) ** 2) and amplitude == pytest.approx(0.0127, abs=1e-4)
+    X_ref = _hand_pose(planning, plan.q_arm[plan.knot_names.index("hold_end")])
+    shake = [i for i, t in enumerate(plan.times) if tl.shake < t <= tl.press]
+    assert len(shake) == 16
+    dz, horizontal, turn = [], [], []
+    for i in shake:
+        X = _hand_pose(planning, plan.q_arm[i])
+        dz.append(X[2, 3] - X_ref[2, 3])
+        horizontal.append(np.linalg.norm(X[:2, 3] - X_ref[:2, 3]))
+        turn.append(rotation_deg(X_ref, X))
+        phase = 2 * np.pi * params.shake_frequency * (plan.times[i] - tl.shake)
+        assert dz[-1] == pytest.approx(amplitude * (1 - np.cos(phase)), abs=3e-4)
+    mean = 0.5 * (max(dz) + min(dz))
+    assert max(dz) - mean == pytest.approx(amplitude, abs=3e-4) and mean - min(dz) == pytest.approx(amplitude, abs=3e-4)
+    assert abs(dz[-1]) < 1e-4  # back at the lifted height
+    assert max(horizontal) < 1e-3 and max(turn) < 1.0
+    # the executed cubic: within the knots' envelope, orientation fixed, peak acceleration ~ 2 m/s^2
+    traj = plan.arm_trajectory()
+    ts = np.linspace(tl.shake - 0.1, tl.press + 0.1, 241)
+    z = []
+    for t in ts:
+        X = _hand_pose(planning, traj.value(t).ravel())
+        z.append(X[2, 3] - X_ref[2, 3])
+        assert -1e-4 <= z[-1] <= 2 * amplitude + 1e-3
+        assert rotation_deg(X_ref, X) < 1.0
+    acceleration = np.diff(z, 2) / (ts[1] - ts[0]) ** 2
+    assert 1.8 < np.abs(acceleration).max() < 2.4
+    # the press: the arm holds, the index finger's joints go to their upper limits, the rest stays closed
+    i_end, i_hold = plan.knot_names.index("end"), plan.knot_names.index("hold_end")
+    assert np.allclose(plan.q_arm[i_end], plan.q_arm[i_hold], atol=1e-9)
+    limits = {"svh_index_proximal": 0.79849, "svh_index_distal": 1.334}
+    for j, name in enumerate(HAND_ACTUATED_JOINTS):
+        want = limits.get(name, plan.q_hand[i_hold][j])
+        assert plan.q_hand[i_end][j] == pytest.approx(want)
