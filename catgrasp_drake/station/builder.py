@@ -194,6 +194,28 @@ def _add_object(plant: MultibodyPlant, parser, scenario: Scenario) -> ModelInsta
     return instance
 
 
+def _apply_physics_knobs(plant: MultibodyPlant, scene_graph: SceneGraph, scenario: Scenario, hand, obj) -> None:
+    """``PlantSpec.hand_effort_scale`` (hand effort limits scaled) and ``object_friction`` (replaced)."""
+    p = scenario.plant
+    if p.hand_effort_scale != 1.0:
+        from pydrake.multibody.tree import JointActuatorIndex
+
+        for i in range(plant.num_actuators()):  # (GetJointActuatorIndices is empty before Finalize)
+            actuator = plant.get_mutable_joint_actuator(JointActuatorIndex(i))
+            if actuator.model_instance() == hand:
+                actuator.set_effort_limit(actuator.effort_limit() * p.hand_effort_scale)
+    if p.object_friction is not None:
+        from pydrake.geometry import RoleAssign
+
+        inspector = scene_graph.model_inspector()
+        for body_index in plant.GetBodyIndices(obj):
+            for gid in plant.GetCollisionGeometriesForBody(plant.get_body(body_index)):
+                props = ProximityProperties(inspector.GetProximityProperties(gid))
+                props.UpdateProperty("material", "coulomb_friction",
+                                     CoulombFriction(p.object_friction, p.object_friction))
+                scene_graph.AssignRole(plant.get_source_id(), gid, props, RoleAssign.kReplace)
+
+
 def _camera_models(spec: CameraSpec) -> tuple[ColorRenderCamera, DepthRenderCamera]:
     info = CameraInfo(spec.width, spec.height, float(np.radians(spec.fov_y_deg)))
     near, far = spec.depth_range
@@ -222,7 +244,8 @@ def _add_camera(builder: DiagramBuilder, handles: StationHandles, spec: CameraSp
     c = scenario.object_cloud
     cloud = builder.AddNamedSystem(f"{spec.name}_object_cloud", ObjectCloudSystem(
         depth.core().intrinsics(), handles.object_label, crop_min=c.crop_min, crop_max=c.crop_max,
-        voxel_size=c.voxel_size, noise_std=c.depth_noise_std, seed=c.seed))
+        voxel_size=c.voxel_size, noise_std=c.depth_noise_std, seed=c.seed, noise_model=c.depth_noise_model,
+        edge_dropout=c.edge_dropout))
     builder.Connect(sensor.depth_image_32F_output_port(), cloud.GetInputPort("depth_image"))
     builder.Connect(sensor.label_image_output_port(), cloud.GetInputPort("label_image"))
     builder.Connect(sensor.body_pose_in_world_output_port(), cloud.GetInputPort("camera_pose"))
@@ -279,6 +302,7 @@ def add_station(builder: DiagramBuilder, scenario: Scenario, meshcat: Meshcat | 
     arm_hand = add_arm_and_hand(plant, parser, X_W_ArmBase=RigidTransform(scenario.arm_base.matrix()))
     arm, hand = arm_hand.arm, arm_hand.hand
     obj = _add_object(plant, parser, scenario)
+    _apply_physics_knobs(plant, scene_graph, scenario, hand, obj)
     plant.set_gravity_enabled(arm, False)
     plant.set_gravity_enabled(hand, False)
     plant.Finalize()

@@ -163,8 +163,10 @@ class ObjectCloudSpec:
     voxel_size: float = 0.005
     crop_min: tuple[float, float, float] = (-0.5, -1.0, -0.02)
     crop_max: tuple[float, float, float] = (1.5, 1.0, 1.0)
-    depth_noise_std: float = 0.0
+    depth_noise_std: float = 0.0  # m; "kinect": the axial std at 1 m (it grows with depth squared)
     seed: int = 0
+    depth_noise_model: str = "gaussian"  # or "kinect" (systems.object_cloud._mask_depth)
+    edge_dropout: float = 0.0  # "kinect": probability of dropping a silhouette / depth-jump pixel
 
 
 @dataclass(frozen=True)
@@ -175,6 +177,10 @@ class PlantSpec:
     discrete_contact_approximation: str = "sap"
     contact_model: str = "hydroelastic_with_fallback"
     penetration_allowance: float = 1e-3
+    #: Physics-sensitivity knobs (defaults: the station as tuned): the hand's effort limits times
+    #: this factor (1/1.7: the real SVH's), and the object's Coulomb friction replaced (None: its SDF's).
+    hand_effort_scale: float = 1.0
+    object_friction: float | None = None
 
 
 #: UR10 home configuration (rad): the robot model's home turned by pi about the base so the
@@ -345,11 +351,17 @@ def _object_cloud(value, where: str) -> ObjectCloudSpec:
     seed = d.get("seed", c.seed)
     if not isinstance(seed, int) or isinstance(seed, bool) or seed < 0:
         raise InputError(f"{where}.seed: expected a non-negative integer, got {seed!r}")
+    model = d.get("depth_noise_model", c.depth_noise_model)
+    if model not in ("gaussian", "kinect"):
+        raise InputError(f"{where}.depth_noise_model: expected 'gaussian' or 'kinect', got {model!r}")
+    dropout = _num(d.get("edge_dropout", c.edge_dropout), f"{where}.edge_dropout", nonneg=True)
+    if dropout > 1.0:
+        raise InputError(f"{where}.edge_dropout: a probability in [0, 1], got {dropout:g}")
     return ObjectCloudSpec(
         voxel_size=_num(d.get("voxel_size", c.voxel_size), f"{where}.voxel_size", nonneg=True),
         crop_min=lo, crop_max=hi,
         depth_noise_std=_num(d.get("depth_noise_std", c.depth_noise_std), f"{where}.depth_noise_std", nonneg=True),
-        seed=seed,
+        seed=seed, depth_noise_model=model, edge_dropout=dropout,
     )
 
 
@@ -372,6 +384,10 @@ def _plant(value, where: str) -> PlantSpec:
         contact_model=model,
         penetration_allowance=_num(d.get("penetration_allowance", p.penetration_allowance),
                                    f"{where}.penetration_allowance", positive=True),
+        hand_effort_scale=_num(d.get("hand_effort_scale", p.hand_effort_scale), f"{where}.hand_effort_scale",
+                               positive=True),
+        object_friction=None if d.get("object_friction") is None else _num(
+            d["object_friction"], f"{where}.object_friction", positive=True),
     )
 
 

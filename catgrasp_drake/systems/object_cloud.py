@@ -24,18 +24,55 @@ from catgrasp_drake.errors import InputError
 
 
 # ----------------------------------------------------------------------------- pure maths
+#: Depth noise models of :func:`_mask_depth`.
+NOISE_MODELS = ("gaussian", "kinect")
+
+
+def _object_edges(keep: np.ndarray, depth: np.ndarray, jump: float = 0.02) -> np.ndarray:
+    """Pixels of the mask ``keep`` (H, W) on its boundary or next to a depth jump > ``jump`` (m)."""
+    edge = np.zeros_like(keep)
+    for axis in (0, 1):
+        for shift in (1, -1):
+            nb_keep = np.roll(keep, shift, axis=axis)
+            nb_depth = np.roll(depth, shift, axis=axis)
+            with np.errstate(invalid="ignore"):
+                edge |= keep & (~nb_keep | (np.abs(nb_depth - depth) > jump))
+    edge[0, :] |= keep[0, :]
+    edge[-1, :] |= keep[-1, :]
+    edge[:, 0] |= keep[:, 0]
+    edge[:, -1] |= keep[:, -1]
+    return edge
+
+
 def _mask_depth(depth: np.ndarray, label: np.ndarray, object_label: int,
-                noise_std: float = 0.0, rng: np.random.Generator | None = None) -> np.ndarray:
+                noise_std: float = 0.0, rng: np.random.Generator | None = None, *,
+                noise_model: str = "gaussian", edge_dropout: float = 0.0) -> np.ndarray:
     """Depth (H, W) in metres with every pixel not labelled ``object_label`` set to NaN.
 
-    With ``noise_std`` > 0, zero-mean Gaussian noise (metres, std ``noise_std``)
-    drawn from ``rng`` is added to the kept pixels' depth.
+    Noise, drawn from ``rng`` (required when there is any), on the kept pixels:
+
+    - ``noise_model`` "gaussian": zero-mean Gaussian depth noise of std ``noise_std`` (m);
+    - "kinect" (a Kinect-v2-like time-of-flight sensor): axial std
+      ``noise_std * z**2`` (``noise_std`` is the std at z = 1 m, e.g. 1.5 mm),
+      and each pixel on the object's silhouette or next to a depth jump
+      > 2 cm is dropped (NaN) with probability ``edge_dropout`` (flying-pixel
+      filtering; a few per cent of the object's pixels at 0.5).
     """
+    if noise_model not in NOISE_MODELS:
+        raise InputError(f"noise_model: expected one of {NOISE_MODELS}, got {noise_model!r}")
     out = np.where(label == object_label, depth, np.nan).astype(np.float32)
-    if noise_std > 0:
-        if rng is None:
-            raise InputError("_mask_depth: noise needs an explicit random generator")
-        keep = np.isfinite(out)
+    keep = np.isfinite(out)
+    if (noise_std > 0 or edge_dropout > 0) and rng is None:
+        raise InputError("_mask_depth: noise needs an explicit random generator")
+    if noise_model == "kinect" and edge_dropout > 0:
+        edge = _object_edges(keep, out)
+        drop = edge & (rng.random(out.shape) < edge_dropout)
+        out[drop] = np.nan
+        keep &= ~drop
+    if noise_std > 0 and noise_model == "kinect":
+        z = out[keep].astype(np.float64)
+        out[keep] = (z + rng.normal(0.0, 1.0, size=z.shape) * noise_std * z ** 2).astype(np.float32)
+    elif noise_std > 0:
         out[keep] += rng.normal(0.0, noise_std, size=int(keep.sum())).astype(np.float32)
     return out
 
@@ -81,13 +118,21 @@ class LabelDepthMask(LeafSystem):
         depth_image: ``ImageDepth32F`` (metres).
         label_image: ``ImageLabel16I`` of the same size.
     Output ports:
-        depth_image: ``ImageDepth32F``, NaN off the object; noise, if any, is
+        depth_image: ``ImageDepth32F``, NaN off the object; noise (``_mask_depth``:
+            "gaussian" or the Kinect-v2-like "kinect" model), if any, is
             drawn from ``numpy.random.default_rng([seed, round(t * 1e6)])`` so
             a given time always gives the same noise.
     """
 
-    def __init__(self, width: int, height: int, object_label: int, *, noise_std: float = 0.0, seed: int = 0):
+    def __init__(self, width: int, height: int, object_label: int, *, noise_std: float = 0.0, seed: int = 0,
+                 noise_model: str = "gaussian", edge_dropout: float = 0.0):
         super().__init__()
+        if noise_model not in NOISE_MODELS:
+            raise InputError(f"noise_model: expected one of {NOISE_MODELS}, got {noise_model!r}")
+        self._noise_model = noise_model
+        self._edge_dropout = non_negative(edge_dropout, "edge_dropout")
+        if self._edge_dropout > 1.0:
+            raise InputError(f"edge_dropout: a probability in [0, 1], got {self._edge_dropout:g}")
         width, height = count(width, "width", 1), count(height, "height", 1)
         self._size = (height, width)
         self._object_label = count(object_label, "object_label", -32768, 32767)  # ImageLabel16I values
@@ -107,10 +152,11 @@ class LabelDepthMask(LeafSystem):
             raise InputError(f"LabelDepthMask: depth image {depth.shape[::-1]} and label image {label.shape[::-1]} "
                              f"must both be {self._size[::-1]} (width, height) as declared")
         rng = None
-        if self._noise_std > 0:
+        if self._noise_std > 0 or self._edge_dropout > 0:
             rng = np.random.default_rng([self._seed, int(round(context.get_time() * 1e6))])
         image = output.get_mutable_value()
-        image.mutable_data[:, :, 0] = _mask_depth(depth, label, self._object_label, self._noise_std, rng)
+        image.mutable_data[:, :, 0] = _mask_depth(depth, label, self._object_label, self._noise_std, rng,
+                                                  noise_model=self._noise_model, edge_dropout=self._edge_dropout)
 
 
 class CloudCropVoxel(LeafSystem):
@@ -158,11 +204,13 @@ class ObjectCloudSystem(Diagram):
     """
 
     def __init__(self, camera_info: CameraInfo, object_label: int, *, crop_min=(-10.0,) * 3,
-                 crop_max=(10.0,) * 3, voxel_size: float = 0.005, noise_std: float = 0.0, seed: int = 0):
+                 crop_max=(10.0,) * 3, voxel_size: float = 0.005, noise_std: float = 0.0, seed: int = 0,
+                 noise_model: str = "gaussian", edge_dropout: float = 0.0):
         super().__init__()
         builder = DiagramBuilder()
         mask = builder.AddNamedSystem("mask", LabelDepthMask(camera_info.width(), camera_info.height(), object_label,
-                                                             noise_std=noise_std, seed=seed))
+                                                             noise_std=noise_std, seed=seed, noise_model=noise_model,
+                                                             edge_dropout=edge_dropout))
         to_cloud = builder.AddNamedSystem("to_cloud", DepthImageToPointCloud(
             camera_info, PixelType.kDepth32F, 1.0, BaseField.kXYZs))
         crop = builder.AddNamedSystem("crop", CloudCropVoxel(crop_min, crop_max, voxel_size))
