@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 from pydrake.geometry import Meshcat, Rgba
@@ -29,14 +30,16 @@ from pydrake.perception import Concatenate, PointCloud
 from pydrake.common.value import AbstractValue
 from pydrake.systems.analysis import InitializeParams
 from pydrake.systems.framework import DiagramBuilder, EventStatus, LeafSystem
+from pydrake.systems.primitives import ConstantValueSource
 
 from catgrasp_drake.category_model import CategoryModel
 from catgrasp_drake.errors import InputError
 from catgrasp_drake.station.builder import StationHandles, add_station, make_planning_model
 from catgrasp_drake.station.scenario import CameraSpec, Scenario
 from catgrasp_drake.station.trial import judge_spec, simulate_and_judge
-from catgrasp_drake.systems.grasp_regressor import GraspRegressor
-from catgrasp_drake.systems.object_cloud import points_from_cloud
+from catgrasp_drake.prediction import ESTIMATORS, check_method, rigid_space
+from catgrasp_drake.systems.object_cloud import cloud_from_points, points_from_cloud
+from catgrasp_drake.systems.predictors import GraspPredictor
 from catgrasp_drake.systems.shape_estimator import LatentShapeEstimator, ShapeEstimate
 from catgrasp_drake.systems.trajectory_generator import MotionTrajectoryGenerator, PlanParams
 
@@ -150,28 +153,51 @@ class TransferDiagram:
     diagram: object
     station: StationHandles
     estimator: LatentShapeEstimator
-    regressor: GraspRegressor
+    regressor: GraspPredictor
     generator: MotionTrajectoryGenerator
     cloud_port: object  # the output port feeding the estimator
     view: str
     model: CategoryModel
     meshcat: Meshcat | None = None
+    method: str = "latent"
+
+
+def true_object_points_W(scenario: Scenario) -> np.ndarray:
+    """Vertices (N, 3) of the scenario's true object mesh at its initial pose, in W (the ablation's obstacle)."""
+    import trimesh
+
+    from catgrasp_drake.data.dataset import instance_mesh_path
+
+    o = scenario.object
+    if o.primitive is not None or o.instance is None:
+        raise InputError("the true-object planner needs a data-set or imported object, not a primitive")
+    path = Path(o.model_dir) / f"{o.instance}.obj" if o.model_dir is not None else instance_mesh_path(
+        o.category, o.instance)
+    mesh = trimesh.load(path, force="mesh", process=False)
+    X = scenario.X_WO()
+    return np.asarray(mesh.vertices, float) @ X[:3, :3].T + X[:3, 3]
 
 
 def make_transfer_diagram(scenario: Scenario, model: CategoryModel, meshcat: Meshcat | None = None, *,
                           view: str = "single", camera: str | None = None, min_confidence: float = 0.0,
-                          params: PlanParams = PlanParams(), yaw_candidates=8, **inference_kwargs) -> TransferDiagram:
+                          params: PlanParams = PlanParams(), yaw_candidates=8, method: str = "latent",
+                          **inference_kwargs) -> TransferDiagram:
     """The station with the transfer systems wired in (module docstring); see :class:`TransferDiagram`.
 
     ``view`` "single": the scenario's camera ``camera`` (default its first)
     with the visibility-aware fit; "full": ``FULL_VIEW_CAMERAS`` cameras on a
     ring around the object, clouds merged, no visibility model.
     ``min_confidence``: below it the motion is refused (status "refused: ...").
+    ``method`` (:mod:`catgrasp_drake.prediction`): "latent" (this project),
+    or a baseline -- "paper" (no visibility model), "rigid", "cpd", "nearest"
+    -- each with its own estimator set-up and a :class:`GraspPredictor`; or
+    the ablation "true_object" (latent, planned around the true object).
     """
     if not isinstance(model, CategoryModel):
         raise InputError(f"model: expected a CategoryModel, got {type(model).__name__}")
     if view not in VIEWS:
         raise InputError(f"view: expected one of {VIEWS}, got {view!r}")
+    setup = ESTIMATORS[check_method(method)]
     if scenario.object.category is not None and scenario.object.category != model.category:
         raise InputError(f"the scenario's object is a {scenario.object.category!r}, the model is for "
                          f"{model.category!r}")
@@ -181,29 +207,39 @@ def make_transfer_diagram(scenario: Scenario, model: CategoryModel, meshcat: Mes
         raise InputError(f"scenario {scenario.name!r} has no camera; a single view needs one")
     builder = DiagramBuilder()
     h = add_station(builder, scenario, meshcat)
+    space = rigid_space(model.space) if setup.rigid else model.space
     estimator = builder.AddNamedSystem("shape_estimator", LatentShapeEstimator(
-        model.space, scenario.table.pose.matrix(), yaw_candidates=yaw_candidates, **inference_kwargs))
+        space, scenario.table.pose.matrix(), yaw_candidates=yaw_candidates, **inference_kwargs))
     if view == "single":
         name = camera or scenario.cameras[0].name
         if name not in h.cameras:
             raise InputError(f"camera {name!r} not in scenario {scenario.name!r}; cameras: {sorted(h.cameras)}")
         cloud_port = h.object_clouds[name].GetOutputPort("object_cloud_W")
-        builder.Connect(h.cameras[name].body_pose_in_world_output_port(), estimator.GetInputPort("camera_pose"))
+        if setup.visibility:
+            builder.Connect(h.cameras[name].body_pose_in_world_output_port(), estimator.GetInputPort("camera_pose"))
     else:
         merger = builder.AddNamedSystem("cloud_merger", CloudMerger(len(h.cameras)))
         for i, name in enumerate(h.cameras):
             builder.Connect(h.object_clouds[name].GetOutputPort("object_cloud_W"), merger.get_input_port(i))
         cloud_port = merger.get_output_port()
     builder.Connect(cloud_port, estimator.GetInputPort("object_cloud_W"))
-    regressor = builder.AddNamedSystem("grasp_regressor", GraspRegressor(model))
+    regressor = builder.AddNamedSystem("grasp_regressor", GraspPredictor(model, method))
     for port in ("x", "X_WO", "scale"):
         builder.Connect(estimator.GetOutputPort(port), regressor.GetInputPort(port))
+    if method == "cpd":
+        builder.Connect(cloud_port, regressor.GetInputPort("observed_cloud_W"))
+        builder.Connect(estimator.GetOutputPort("completed_cloud_W"), regressor.GetInputPort("completed_cloud_W"))
     planning = make_planning_model(scenario)
     generator = builder.AddNamedSystem("grasp_trajectory", MotionTrajectoryGenerator(
         h.plant, h.arm, h.hand, planning, params=params, min_confidence=min_confidence))
     builder.Connect(regressor.GetOutputPort("grasp_motion_W"), generator.GetInputPort("grasp_motion_W"))
     builder.Connect(estimator.GetOutputPort("confidence"), generator.GetInputPort("confidence"))
-    builder.Connect(estimator.GetOutputPort("completed_cloud_W"), generator.GetInputPort("object_cloud_W"))
+    if method == "true_object":
+        truth = builder.AddNamedSystem("true_object_cloud", ConstantValueSource(
+            AbstractValue.Make(cloud_from_points(true_object_points_W(scenario)))))
+        builder.Connect(truth.get_output_port(), generator.GetInputPort("object_cloud_W"))
+    else:
+        builder.Connect(estimator.GetOutputPort("completed_cloud_W"), generator.GetInputPort("object_cloud_W"))
     builder.Connect(generator.GetOutputPort("arm_desired_state"), h.plant.get_desired_state_input_port(h.arm))
     builder.Connect(generator.GetOutputPort("hand_desired_state"), h.plant.get_desired_state_input_port(h.hand))
     if meshcat is not None:
@@ -214,7 +250,7 @@ def make_transfer_diagram(scenario: Scenario, model: CategoryModel, meshcat: Mes
         builder.Connect(generator.GetOutputPort("plan"), viz.GetInputPort("plan"))
     diagram = builder.Build()
     diagram.set_name("grasp_transfer")
-    return TransferDiagram(diagram, h, estimator, regressor, generator, cloud_port, view, model, meshcat)
+    return TransferDiagram(diagram, h, estimator, regressor, generator, cloud_port, view, model, meshcat, method)
 
 
 @dataclass(frozen=True)
@@ -237,6 +273,9 @@ class TransferResult:
     object_tilt_deg: float
     num_observed_points: int
     timings: dict = field(default_factory=dict)  # seconds per stage
+    #: What the judge measured (NaN where not measured): the force along the trigger's travel (N),
+    #: the object's largest shift (m) and turn (deg) in the hand after the start of the hold.
+    judge: dict = field(default_factory=dict)
 
     def to_dict(self) -> dict:
         from dataclasses import asdict
@@ -298,10 +337,12 @@ def run_transfer(td: TransferDiagram, *, record_html=None, return_context: bool 
     timings["execute"] = time.perf_counter() - t0
     timings["simulated_s"] = sim_time
     timings["total"] = time.perf_counter() - t_all
+    measured = {k: float(getattr(verdict, k, float("nan"))) for k in
+                ("trigger_force_N", "in_hand_shift_m", "in_hand_turn_deg")}
     result = TransferResult(grasp_success=verdict.grasp_success, functional_success=verdict.functional_success,
                             failure_reason=verdict.failure_reason, detail=verdict.detail,
                             object_rise_m=float(verdict.object_rise_m), object_tilt_deg=float(verdict.tilt_deg),
-                            timings=timings, **base)
+                            timings=timings, judge=measured, **base)
     return (result, context) if return_context else result
 
 

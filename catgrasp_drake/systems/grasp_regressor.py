@@ -14,14 +14,13 @@ and reused by every simulation step.
 from __future__ import annotations
 
 import numpy as np
-from pydrake.common.value import AbstractValue
 from pydrake.math import RigidTransform
-from pydrake.systems.framework import LeafSystem
 
 from catgrasp_drake.category_model import CategoryModel
 from catgrasp_drake.core.validation import real_array
 from catgrasp_drake.errors import InputError
 from catgrasp_drake.grasping.motion import GraspMotion
+from catgrasp_drake.systems.predictors import GraspPredictor
 
 
 def predict_motion_W(model: CategoryModel, x, X_WO, scale: float) -> GraspMotion:
@@ -32,8 +31,8 @@ def predict_motion_W(model: CategoryModel, x, X_WO, scale: float) -> GraspMotion
     return model.transfer(x, X[:3, :3], X[:3, 3], scale, frame="world")
 
 
-class GraspRegressor(LeafSystem):
-    """Predicts the grasping motion for an estimated shape and pose.
+class GraspRegressor(GraspPredictor):
+    """Predicts the grasping motion for an estimated shape and pose: the ``latent`` :class:`GraspPredictor`.
 
     Input ports:
         x: latent vector (q,) of the category model's shape space.
@@ -47,21 +46,4 @@ class GraspRegressor(LeafSystem):
     """
 
     def __init__(self, model: CategoryModel):
-        super().__init__()
-        if not isinstance(model, CategoryModel):
-            raise InputError(f"model: expected a CategoryModel, got {type(model).__name__}")
-        self._model = model
-        self._x_in = self.DeclareVectorInputPort("x", model.space.q)
-        self._X_in = self.DeclareAbstractInputPort("X_WO", AbstractValue.Make(RigidTransform()))
-        self._s_in = self.DeclareVectorInputPort("scale", 1)
-        default = model.transfer(np.zeros(model.space.q), frame="world")
-        self.DeclareAbstractOutputPort("grasp_motion_W", lambda: AbstractValue.Make(default), self._calc,
-                                       prerequisites_of_calc={self.all_input_ports_ticket()})
-
-    @property
-    def model(self) -> CategoryModel:
-        return self._model
-
-    def _calc(self, context, output):
-        s = float(self._s_in.Eval(context)[0]) if self._s_in.HasValue(context) else 1.0
-        output.set_value(predict_motion_W(self._model, self._x_in.Eval(context), self._X_in.Eval(context), s))
+        super().__init__(model, "latent")

@@ -1,0 +1,96 @@
+"""Grasp predictors: the transfer diagram's grasp-prediction stage for every method.
+
+:class:`GraspPredictor` has the ports of :class:`~catgrasp_drake.systems.grasp_regressor.GraspRegressor`
+(``x``, ``X_WO``, ``scale`` -> ``grasp_motion_W``) and runs one method of
+:mod:`catgrasp_drake.prediction` (``latent``, ``paper``, ``rigid``, ``cpd``,
+``nearest``, ``true_object``), so a baseline is swapped into
+``make_transfer_diagram`` without touching the rest of the diagram: every
+method is perceived, estimated, planned around the perceived shape, refused
+below the confidence threshold and executed in the same way.
+
+Evaluation model: output calculation cached on the input ports (the
+estimate is state, so the prediction runs once per estimate).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from pydrake.common.value import AbstractValue
+from pydrake.math import RigidTransform
+from pydrake.perception import PointCloud
+from pydrake.systems.framework import LeafSystem
+
+from catgrasp_drake.category_model import CategoryModel
+from catgrasp_drake.errors import CatgraspError, InputError
+from catgrasp_drake.prediction import check_method, predict_motion
+from catgrasp_drake.systems.object_cloud import points_from_cloud
+
+
+class GraspPredictor(LeafSystem):
+    """Predicts the grasping motion in W for an estimated shape and pose, by one method.
+
+    .. pydrake_system::
+
+        name: GraspPredictor
+        input_ports:
+        - x
+        - X_WO
+        - scale
+        - observed_cloud_W (cpd only)
+        - completed_cloud_W (cpd only)
+        output_ports:
+        - grasp_motion_W
+
+    Input ports:
+        x: latent vector (q,) of the model's shape space.
+        X_WO: ``RigidTransform``, pose of the canonical frame O in the world W.
+        scale: (1,) uniform scale of the canonical shape (1 if unconnected).
+        observed_cloud_W, completed_cloud_W: ``PointCloud`` (W, metres), declared
+            for the ``cpd`` method only (its field registers one onto the other).
+    Output ports:
+        grasp_motion_W: ``GraspMotion`` (``frame == "world"``): control poses
+            X_WH of the hand base H, metres, and the hand postures. If the
+            method cannot predict (CPD without a cloud: no estimate) the output
+            is the undeformed canonical grasp at X_WO, which the trajectory
+            generator refuses by the estimate's zero confidence.
+    Parameters (constructor): the trained ``CategoryModel`` and the method name.
+    """
+
+    def __init__(self, model: CategoryModel, method: str = "latent"):
+        super().__init__()
+        if not isinstance(model, CategoryModel):
+            raise InputError(f"model: expected a CategoryModel, got {type(model).__name__}")
+        self._model = model
+        self._method = check_method(method)
+        self._x_in = self.DeclareVectorInputPort("x", model.space.q)
+        self._X_in = self.DeclareAbstractInputPort("X_WO", AbstractValue.Make(RigidTransform()))
+        self._s_in = self.DeclareVectorInputPort("scale", 1)
+        self._clouds = None
+        if method == "cpd":
+            self._clouds = (self.DeclareAbstractInputPort("observed_cloud_W", AbstractValue.Make(PointCloud())),
+                            self.DeclareAbstractInputPort("completed_cloud_W", AbstractValue.Make(PointCloud())))
+        default = model.transfer(np.zeros(model.space.q), frame="world")
+        self.DeclareAbstractOutputPort("grasp_motion_W", lambda: AbstractValue.Make(default), self._calc,
+                                       prerequisites_of_calc={self.all_input_ports_ticket()})
+
+    @property
+    def model(self) -> CategoryModel:
+        return self._model
+
+    @property
+    def method(self) -> str:
+        return self._method
+
+    def _calc(self, context, output):
+        s = float(self._s_in.Eval(context)[0]) if self._s_in.HasValue(context) else 1.0
+        X_WO = self._X_in.Eval(context).GetAsMatrix4()
+        x = self._x_in.Eval(context)
+        clouds = {}
+        if self._clouds is not None:
+            clouds = {"observed_W": points_from_cloud(self._clouds[0].Eval(context)),
+                      "completed_W": points_from_cloud(self._clouds[1].Eval(context))}
+        try:
+            motion, _ = predict_motion(self._method, self._model, x, X_WO, s, **clouds)
+        except CatgraspError:  # no usable cloud: fall back to the undeformed grasp at the estimated pose
+            motion = self._model.transfer(np.zeros(self._model.space.q), X_WO[:3, :3], X_WO[:3, 3], s)
+        output.set_value(motion)

@@ -1,0 +1,97 @@
+"""Every method as a predictor system with the regressor's ports, swapped into the transfer diagram."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from pydrake.math import RigidTransform, RollPitchYaw
+
+from catgrasp_drake.category_model import CategoryModel
+from catgrasp_drake.demo import default_model_path
+from catgrasp_drake.errors import InputError
+from catgrasp_drake.prediction import METHODS, predict_motion
+from catgrasp_drake.station.scenario import load_scenario, with_instance
+from catgrasp_drake.systems.object_cloud import cloud_from_points
+from catgrasp_drake.systems.predictors import GraspPredictor
+from catgrasp_drake.transfer import make_transfer_diagram
+
+
+@pytest.fixture(scope="module")
+def drill():
+    return CategoryModel.load(default_model_path("drill"), category="drill")
+
+
+def _pose():
+    return RigidTransform(RollPitchYaw(0.0, 0.0, 0.4), [0.6, 0.05, 0.0]).GetAsMatrix4()
+
+
+def test_cpd_on_an_observation_equal_to_the_aligned_canonical_shape_is_the_rigid_grasp(drill):
+    X_WO, s = _pose(), 1.1
+    canonical_W = s * drill.space.canonical @ X_WO[:3, :3].T + X_WO[:3, 3]
+    rigid, _ = predict_motion("rigid", drill, np.zeros(drill.space.q), X_WO, s)
+    cpd, _ = predict_motion("cpd", drill, np.zeros(drill.space.q), X_WO, s, observed_W=canonical_W,
+                            completed_W=canonical_W)
+    np.testing.assert_allclose(cpd.poses, rigid.poses, atol=2e-4)  # no deformation to find: the same grasp
+    with pytest.raises(InputError, match="cpd method needs"):
+        predict_motion("cpd", drill, np.zeros(drill.space.q), X_WO, s)
+
+
+def test_cpd_keeps_the_pregrasp_offset_from_the_warped_grasp(drill):
+    X_WO, s = _pose(), 1.0
+    canonical_W = drill.space.canonical @ X_WO[:3, :3].T + X_WO[:3, 3]
+    stretched = canonical_W.copy()
+    stretched[:, 2] = (stretched[:, 2] - X_WO[2, 3]) * 1.15 + X_WO[2, 3]  # a taller drill
+    cpd, _ = predict_motion("cpd", drill, np.zeros(drill.space.q), X_WO, s, observed_W=stretched,
+                            completed_W=canonical_W)
+    rigid, _ = predict_motion("rigid", drill, np.zeros(drill.space.q), X_WO, s)
+    names = list(cpd.pose_names)
+    pre, grasp = names.index("pregrasp"), names.index("grasp")
+    offset_cpd = np.linalg.solve(cpd.poses[grasp], cpd.poses[pre])
+    offset_rigid = np.linalg.solve(rigid.poses[grasp], rigid.poses[pre])
+    np.testing.assert_allclose(offset_cpd, offset_rigid, atol=1e-9)
+    assert cpd.poses[grasp][2, 3] > rigid.poses[grasp][2, 3] + 0.005  # the grasp rose with the taller handle
+
+
+@pytest.mark.parametrize("method", [m for m in METHODS if m != "cpd"])
+def test_predictor_ports_give_the_pure_function(drill, method):
+    sys = GraspPredictor(drill, method)
+    ctx = sys.CreateDefaultContext()
+    x = np.linspace(-0.5, 0.5, drill.space.q)
+    X_WO = _pose()
+    sys.GetInputPort("x").FixValue(ctx, x)
+    sys.GetInputPort("X_WO").FixValue(ctx, RigidTransform(X_WO))
+    sys.GetInputPort("scale").FixValue(ctx, [0.95])
+    got = sys.GetOutputPort("grasp_motion_W").Eval(ctx)
+    want, _ = predict_motion(method, drill, x, X_WO, 0.95)
+    np.testing.assert_array_equal(got.poses, want.poses)
+    assert got.frame == "world"
+
+
+def test_cpd_predictor_reads_its_clouds(drill):
+    sys = GraspPredictor(drill, "cpd")
+    ctx = sys.CreateDefaultContext()
+    X_WO = _pose()
+    canonical_W = drill.space.canonical @ X_WO[:3, :3].T + X_WO[:3, 3]
+    sys.GetInputPort("x").FixValue(ctx, np.zeros(drill.space.q))
+    sys.GetInputPort("X_WO").FixValue(ctx, RigidTransform(X_WO))
+    sys.GetInputPort("scale").FixValue(ctx, [1.0])
+    sys.GetInputPort("observed_cloud_W").FixValue(ctx, cloud_from_points(canonical_W))
+    sys.GetInputPort("completed_cloud_W").FixValue(ctx, cloud_from_points(canonical_W))
+    got = sys.GetOutputPort("grasp_motion_W").Eval(ctx)
+    want, _ = predict_motion("rigid", drill, np.zeros(drill.space.q), X_WO, 1.0)
+    np.testing.assert_allclose(got.poses, want.poses, atol=2e-4)
+
+
+def test_every_method_builds_the_transfer_diagram_with_its_own_estimator(drill):
+    scenario = with_instance(load_scenario("drill_default"), "drill_12")
+    for method in METHODS:
+        td = make_transfer_diagram(scenario, drill, method=method)
+        assert td.regressor.method == method
+        ctx = td.diagram.CreateDefaultContext()
+        est_ctx = td.estimator.GetMyContextFromRoot(ctx)
+        visibility = td.estimator.GetInputPort("camera_pose").HasValue(est_ctx)
+        assert visibility == (method != "paper")  # the paper's fit has no visibility model
+        rigid = not np.any(td.estimator.space.components)
+        assert rigid == (method in ("rigid", "cpd"))
+    with pytest.raises(InputError, match="unknown method"):
+        make_transfer_diagram(scenario, drill, method="oracle")
