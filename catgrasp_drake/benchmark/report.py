@@ -1,0 +1,585 @@
+"""The benchmark's records files and the Markdown tables built from them.
+
+Records are JSON lines (one trial per line, keys sorted) after a header line
+``{"format": "catgrasp.benchmark_records", "format_version": 1, "records": <count>,
+"sha256": <hex of the record lines>}``, written atomically by
+:func:`write_benchmark_records` and checked by :func:`load_benchmark_records`.
+
+The tables are a deterministic function of the records (intervals from
+:mod:`catgrasp_drake.benchmark.stats` with the seed and draw count below; no
+dates, no machine names), so the README and ``docs/benchmark.md`` can be
+rebuilt from the committed records and compared by a test
+(:func:`check_markdown`). They live in Markdown files between marker lines::
+
+    <!-- benchmark:summary -->
+    ...generated, replaced by update_markdown...
+    <!-- /benchmark:summary -->
+
+Markers: ``summary`` (:func:`summary_table`: per split and category, the latent
+method's single-view grasp and functional rates and the best baseline; for the
+README) and ``full`` (:func:`benchmark_tables`: every table, for
+``docs/benchmark.md``).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import re
+from pathlib import Path
+from typing import Iterable, Mapping, Sequence
+
+import numpy as np
+
+from catgrasp_drake.benchmark.stats import PAIR_KEY, bootstrap_rate, pair_records, paired_bootstrap
+from catgrasp_drake.errors import InputError, ModelFileError, one_line
+
+RECORDS_FORMAT = "catgrasp.benchmark_records"
+FORMAT_VERSION = 1
+#: Bootstrap settings of every interval in the tables.
+N_BOOT = 2000
+SEED = 0
+LEVEL = 0.95
+DEFAULT_PHYSICS = "default"
+#: Display orders (values not listed follow, sorted by name).
+SPLITS = ("test", "ycb")
+SPLIT_TITLES = {"test": "held-out generated instances", "ycb": "real scans (YCB)", "smoke": "smoke run"}
+CATEGORIES = ("drill", "spray_bottle", "mug")
+VIEWS = ("single", "full")
+METHODS = ("latent", "paper", "nearest", "rigid", "cpd", "true_object")
+METHOD_LABELS = {"true_object": "true-object planner (ablation)"}
+#: Methods that are not baselines (privileged information): never the "best baseline" of the summary.
+ABLATIONS = ("true_object",)
+#: Categories pooled in the overall tables (stratified bootstrap by category).
+POOLED = ("drill", "spray_bottle")
+MARKERS = ("summary", "full")
+#: Fields every record must have.
+REQUIRED_FIELDS = ("split", "category", "instance", "trial", "view", "method", "physics", "grasp", "functional")
+#: Fields that identify one trial of one method; ``seed`` (the benchmark's seed) is optional in a record.
+#: Two records with the same values are the same trial twice (e.g. a records file passed twice): refused.
+TRIAL_KEY = PAIR_KEY + ("method", "seed")
+#: Pairing keys: methods on the same trials; physics settings on the same trials (same method).
+METHOD_PAIR_KEY = PAIR_KEY + ("seed",)
+PHYSICS_PAIR_KEY = ("split", "category", "instance", "trial", "view", "method", "seed")
+
+_OPEN = re.compile(r"<!--\s*benchmark:([A-Za-z0-9_.-]+)\s*-->")
+_CLOSE = re.compile(r"<!--\s*/benchmark:([A-Za-z0-9_.-]+)\s*-->")
+
+
+# ----------------------------------------------------------------------------- records files
+def _sha256_text(text: str) -> str:
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+def _missing_fields(r) -> list[str]:
+    if not isinstance(r, dict):
+        return list(REQUIRED_FIELDS)
+    return [k for k in REQUIRED_FIELDS if k not in r]
+
+
+def _validated(records: Iterable[dict], *, unique: bool = False) -> list[dict]:
+    records = list(records)
+    for i, r in enumerate(records):
+        if not isinstance(r, dict):
+            raise InputError(f"benchmark record {i}: expected a dict, got {type(r).__name__}")
+        missing = _missing_fields(r)
+        if missing:
+            raise InputError(f"benchmark record {i}: missing fields {', '.join(missing)}")
+    if unique:
+        seen = set()
+        for r in records:
+            k = json.dumps([r.get(f) for f in TRIAL_KEY], default=str)
+            if k in seen:
+                trial = ", ".join(f"{f} {r.get(f)}" for f in TRIAL_KEY)
+                raise InputError(f"the records hold the same trial twice ({trial}); is a records file passed twice?")
+            seen.add(k)
+    return records
+
+
+def _with_seed(records: Iterable[dict]) -> list[dict]:
+    """The records with a ``seed`` field (None where absent), for the pairing keys."""
+    return [r if "seed" in r else r | {"seed": None} for r in records]
+
+
+def write_benchmark_records(path: str | Path, records: Iterable[dict]) -> None:
+    """Write trial records as JSON lines (keys sorted), atomically, after a header with their count and sha256."""
+    from catgrasp_drake.core.fileio import atomic_write_text
+
+    records = _validated(records)
+    body = "".join(json.dumps(r, sort_keys=True) + "\n" for r in records)
+    header = {"format": RECORDS_FORMAT, "format_version": FORMAT_VERSION, "records": len(records),
+              "sha256": _sha256_text(body)}
+    atomic_write_text(path, json.dumps(header, sort_keys=True) + "\n" + body)
+
+
+def _record_files(paths) -> list[Path]:
+    if isinstance(paths, (str, Path)):
+        paths = [paths]
+    out = []
+    for p in paths:
+        p = Path(p)
+        out.extend(sorted(p.glob("*.jsonl")) if p.is_dir() else [p])
+    return out
+
+
+def _load_one(path: Path) -> list[dict]:
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, ValueError) as e:
+        raise ModelFileError(f"{path}: unreadable benchmark records ({one_line(e)})") from None
+    lines = text.splitlines(keepends=True)
+    try:
+        header = json.loads(lines[0]) if lines else None
+    except ValueError:
+        header = None
+    if not isinstance(header, dict) or "format" not in header:
+        raise ModelFileError(f"{path}: no header line; not a {RECORDS_FORMAT!r} file")
+    lines = lines[1:]
+    if header.get("format") != RECORDS_FORMAT:
+        raise ModelFileError(f"{path}: is a {header.get('format')!r} file, expected {RECORDS_FORMAT!r}")
+    if header.get("format_version") != FORMAT_VERSION:
+        raise ModelFileError(f"{path}: format version {header.get('format_version')} but this catgrasp_drake "
+                             f"reads version {FORMAT_VERSION}; re-run the benchmark")
+    count = sum(1 for line in lines if line.strip())
+    if header.get("sha256") != _sha256_text("".join(lines)) or header.get("records") != count:
+        raise ModelFileError(f"{path}: checksum mismatch ({count} record lines, header says "
+                             f"{header.get('records')}); the file is corrupt or was edited")
+    records = []
+    for n, line in enumerate(lines, start=2):
+        if not line.strip():
+            continue
+        try:
+            r = json.loads(line)
+        except ValueError as e:
+            raise ModelFileError(f"{path}: line {n} is not JSON ({one_line(e, with_type=False)}); "
+                                 f"the file is corrupt") from None
+        if not isinstance(r, dict):
+            raise ModelFileError(f"{path}: line {n} is a JSON {type(r).__name__}, not a trial record")
+        missing = _missing_fields(r)
+        if missing:
+            raise ModelFileError(f"{path}: line {n} lacks the fields {', '.join(missing)}")
+        records.append(r)
+    return records
+
+
+def load_benchmark_records(paths: str | Path | Iterable[str | Path]) -> list[dict]:
+    """Read one or more records files (a folder stands for its ``*.jsonl``), concatenated in the order given.
+
+    Raises ModelFileError, with a one-line message naming the file, when one is
+    unreadable, has no header, is of another format or version, does not
+    match its header's record count and checksum, or holds a line that is not
+    a trial record.
+    """
+    out: list[dict] = []
+    for path in _record_files(paths):
+        out.extend(_load_one(path))
+    return out
+
+
+# ----------------------------------------------------------------------------- formatting helpers
+def _ordered(values: Iterable, preferred: Sequence) -> list:
+    present = set(values)
+    return [v for v in preferred if v in present] + sorted(v for v in present if v not in preferred)
+
+
+def _label(method: str) -> str:
+    return METHOD_LABELS.get(method, method)
+
+
+def _category(c: str) -> str:
+    return c.replace("_", " ")
+
+
+def _split_title(split: str) -> str:
+    title = SPLIT_TITLES.get(split)
+    return f"Split `{split}`: {title}" if title else f"Split `{split}`"
+
+
+def _pct(x: float) -> str:
+    return f"{100.0 * x + 0.0:.0f}"  # + 0.0: no "-0"
+
+
+def _rate(instances, successes, strata=None) -> str:
+    """``k/n (p %) [lo–hi %]`` with the instance bootstrap interval; an em dash for no trials."""
+    s = np.asarray(successes, dtype=bool)
+    if len(s) == 0:
+        return "—"
+    p, lo, hi = bootstrap_rate(instances, s, strata=strata, n_boot=N_BOOT, seed=SEED, level=LEVEL)
+    return f"{int(s.sum())}/{len(s)} ({_pct(p)} %) [{_pct(lo)}–{_pct(hi)} %]"
+
+
+def _pp(x: float) -> str:
+    v = 100.0 * x + 0.0
+    return "0" if f"{v:.0f}" in ("0", "-0") else f"{v:+.0f}"
+
+
+def _seconds(x: float, digits: int = 1) -> str:
+    return "—" if not np.isfinite(x) else f"{x:.{digits}f} s"
+
+
+def _timing(r: dict, name: str) -> float:
+    t = r.get("timings")
+    v = t.get(name) if isinstance(t, dict) else None
+    try:
+        v = float(v)
+    except (TypeError, ValueError):
+        return float("nan")
+    return v
+
+
+def _median(values) -> float:
+    v = np.asarray([x for x in values if np.isfinite(x)], dtype=float)
+    return float(np.median(v)) if len(v) else float("nan")
+
+
+def _total(values) -> float:
+    v = [x for x in values if np.isfinite(x)]
+    return float(np.sum(v)) if v else float("nan")
+
+
+def _table(header: Sequence[str], align: Sequence[str], rows: Sequence[Sequence[str]]) -> str:
+    lines = ["| " + " | ".join(header) + " |",
+             "|" + "|".join("---:" if a == "r" else "---" for a in align) + "|"]
+    lines += ["| " + " | ".join(row) + " |" for row in rows]
+    return "\n".join(lines)
+
+
+def _field(records: Sequence[dict], name: str) -> list:
+    return [r[name] for r in records]
+
+
+def _outcome(records: Sequence[dict], name: str) -> np.ndarray:
+    return np.array([bool(r[name]) for r in records], dtype=bool)
+
+
+def _select(records: Sequence[dict], **eq) -> list[dict]:
+    return [r for r in records if all(r[k] == v for k, v in eq.items())]
+
+
+# ----------------------------------------------------------------------------- tables
+_RATE_HEADER = ("method", "trials", "grasp", "functional", "instances", "median time / trial")
+_RATE_ALIGN = ("l", "r", "l", "l", "r", "r")
+
+
+def _method_rows(records: Sequence[dict], *, stratified: bool) -> list[list[str]]:
+    rows = []
+    for method in _ordered(_field(records, "method"), METHODS):
+        rs = _select(records, method=method)
+        inst = _field(rs, "instance")
+        strata = _field(rs, "category") if stratified else None
+        n_inst = len({(r["category"], r["instance"]) for r in rs})
+        rows.append([_label(method), str(len(rs)), _rate(inst, _outcome(rs, "grasp"), strata),
+                     _rate(inst, _outcome(rs, "functional"), strata), str(n_inst),
+                     _seconds(_median(_timing(r, "total") for r in rs))])
+    return rows
+
+
+def _difference_rows(records: Sequence[dict]) -> list[list[str]]:
+    """Latent minus each other method: paired functional-rate differences per category and pooled."""
+    rows = []
+    latent_all = _select(records, method="latent")
+    if not latent_all:
+        return rows
+    categories = _ordered(_field(records, "category"), CATEGORIES)
+    for view in _ordered(_field(records, "view"), VIEWS):
+        cells = [(_category(c), [c]) for c in categories]
+        if all(c in categories for c in POOLED):
+            cells.append((" + ".join(_category(c) for c in POOLED), list(POOLED)))
+        for name, cats in cells:
+            latent = [r for r in latent_all if r["view"] == view and r["category"] in cats]
+            for method in _ordered(_field(records, "method"), METHODS):
+                if method == "latent":
+                    continue
+                other = [r for r in records if r["method"] == method and r["view"] == view and r["category"] in cats]
+                if not latent or not other:
+                    continue
+                pairs = pair_records(latent, other, key=METHOD_PAIR_KEY)
+                if not len(pairs):
+                    continue
+                a, b = pairs.outcomes("functional")
+                d = paired_bootstrap(pairs.field("instance"), a, b,
+                                     strata=pairs.field("category") if len(cats) > 1 else None,
+                                     n_boot=N_BOOT, seed=SEED, level=LEVEL)
+                rows.append([name, f"{view}", _label(method), str(len(pairs)),
+                             f"{int(a.sum())}/{len(a)} ({_pct(d.rate_a)} %)",
+                             f"{int(b.sum())}/{len(b)} ({_pct(d.rate_b)} %)",
+                             f"{_pp(d.diff)} pp [{_pp(d.low)}, {_pp(d.high)}]",
+                             "yes" if d.excludes_zero else "no", f"{d.frac_le_zero:.3f}"])
+    return rows
+
+
+def _split_section(split: str, records: Sequence[dict]) -> list[str]:
+    out = [f"### {_split_title(split)}", ""]
+    categories = _ordered(_field(records, "category"), CATEGORIES)
+    views = _ordered(_field(records, "view"), VIEWS)
+    for category in categories:
+        for view in views:
+            rs = _select(records, category=category, view=view)
+            if rs:
+                out += [f"**{_category(category)}, {view} view**", "",
+                        _table(_RATE_HEADER, _RATE_ALIGN, _method_rows(rs, stratified=False)), ""]
+    if all(c in categories for c in POOLED):
+        for view in views:
+            rs = [r for r in records if r["view"] == view and r["category"] in POOLED]
+            if rs:
+                out += [f"**{' + '.join(_category(c) for c in POOLED)}, {view} view** "
+                        f"(bootstrap stratified by category)", "",
+                        _table(_RATE_HEADER, _RATE_ALIGN, _method_rows(rs, stratified=True)), ""]
+    rows = _difference_rows(records)
+    if rows:
+        out += ["**Latent minus baseline, functional success** (paired trials; difference in percentage "
+                "points with its 95 % interval; P(≤ 0): fraction of bootstrap draws with difference ≤ 0)", "",
+                _table(("category", "view", "baseline", "paired trials", "latent functional", "baseline functional",
+                        "difference [95 %]", "interval excludes 0", "P(≤ 0)"),
+                       ("l", "l", "l", "r", "l", "l", "l", "l", "r"), rows), ""]
+    return out
+
+
+def _physics_section(records: Sequence[dict]) -> list[str]:
+    default = [r for r in records if r["physics"] == DEFAULT_PHYSICS]
+    others = [r for r in records if r["physics"] != DEFAULT_PHYSICS]
+    if not others:
+        return []
+    rows, unpaired = [], 0
+    for split in _ordered(_field(others, "split"), SPLITS):
+        for physics in sorted({r["physics"] for r in others if r["split"] == split}):
+            setting = _select(others, split=split, physics=physics)
+            for method in _ordered(_field(setting, "method"), METHODS):
+                mine = _select(setting, method=method)
+                pairs = pair_records(_select(default, split=split, method=method), mine, key=PHYSICS_PAIR_KEY)
+                unpaired += pairs.unpaired_b
+                if not len(pairs):
+                    continue
+                inst, strata = pairs.field("instance"), pairs.field("category")
+                ga, gb = pairs.outcomes("grasp")
+                fa, fb = pairs.outcomes("functional")
+                agree = (ga == gb) & (fa == fb)
+                rows.append([f"`{split}`", f"`{physics}`", _label(method), str(len(pairs)),
+                             _rate(inst, ga, strata), _rate(inst, gb, strata),
+                             _rate(inst, fa, strata), _rate(inst, fb, strata), _rate(inst, agree, strata)])
+    out = ["### Physics sensitivity", "",
+           "Each setting on its own trials, next to the same trials (instance, placement, view, method) under "
+           "the default physics; agreement: both the grasp and the functional outcome equal the default's.", ""]
+    if rows:
+        out += [_table(("split", "physics", "method", "paired trials", "grasp (default)", "grasp (setting)",
+                        "functional (default)", "functional (setting)", "agreement"),
+                       ("l", "l", "l", "r", "l", "l", "l", "l", "l"), rows), ""]
+    if unpaired:
+        out += [f"{unpaired} trials of other physics settings have no default-physics counterpart and are "
+                f"left out.", ""]
+    return out
+
+
+def _reason_label(r: dict) -> str:
+    reason = r.get("reason")
+    if reason is None or reason == "":
+        return "(success)" if r["functional"] else "(unspecified)"
+    return f"`{reason}`"
+
+
+def _failure_section(records: Sequence[dict]) -> list[str]:
+    latent = _select(records, method="latent")
+    if not latent:
+        return []
+    out = ["### Failure reasons (latent method, default physics, both views)", ""]
+    for split in _ordered(_field(latent, "split"), SPLITS):
+        rs = _select(latent, split=split)
+        categories = _ordered(_field(rs, "category"), CATEGORIES)
+        counts: dict[str, dict[str, int]] = {}
+        for r in rs:
+            row = counts.setdefault(_reason_label(r), {})
+            row[r["category"]] = row.get(r["category"], 0) + 1
+        order = sorted(counts, key=lambda k: (-sum(counts[k].values()), k))
+        rows = [[k] + [str(counts[k].get(c, 0)) for c in categories] + [str(sum(counts[k].values()))]
+                for k in order]
+        rows.append(["all trials"] + [str(len(_select(rs, category=c))) for c in categories] + [str(len(rs))])
+        out += [f"**`{split}`**", "",
+                _table(["reason"] + [_category(c) for c in categories] + ["total"],
+                       ["l"] + ["r"] * (len(categories) + 1), rows), ""]
+    return out
+
+
+def _cost_section(records: Sequence[dict]) -> list[str]:
+    def row(name, method, rs):
+        wall = _total(_timing(r, "total") for r in rs)
+        sim = _total(_timing(r, "simulated_s") for r in rs)
+        return [name, method, str(len(rs)),
+                "—" if not np.isfinite(wall) else f"{wall:.0f} s ({wall / 3600:.2f} h)",
+                "—" if not np.isfinite(sim) else f"{sim:.0f} s",
+                _seconds(_median(_timing(r, "perceive") for r in rs), 2),
+                _seconds(_median(_timing(r, "estimate") for r in rs), 2),
+                _seconds(_median(_timing(r, "plan") for r in rs), 2)]
+
+    rows = []
+    for split in _ordered(_field(records, "split"), SPLITS):
+        rs = _select(records, split=split)
+        for method in _ordered(_field(rs, "method"), METHODS):
+            rows.append(row(f"`{split}`", _label(method), _select(rs, method=method)))
+    rows.append(row("all", "all", list(records)))
+    return ["### Cost (every trial, every physics setting)", "",
+            "Wall time: the sum of the trials' `timings.total`, i.e. seconds of one core; simulated: the sum of "
+            "the simulated seconds.", "",
+            _table(("split", "method", "trials", "wall time", "simulated", "median perceive", "median estimate",
+                    "median plan"), ("l", "l", "r", "r", "r", "r", "r", "r"), rows), ""]
+
+
+def benchmark_tables(records: Iterable[dict]) -> str:
+    """Every benchmark table as Markdown (the ``full`` marker; module docstring). Deterministic.
+
+    InputError if a record lacks a field of :data:`REQUIRED_FIELDS` or two records are the same trial.
+    """
+    records = _with_seed(_validated(records, unique=True))
+    if not records:
+        return "No benchmark records."
+    default = [r for r in records if r["physics"] == DEFAULT_PHYSICS]
+    out = [f"Rates: successes/trials (pooled rate) [{100 * LEVEL:.0f} % interval: percentile bootstrap over "
+           f"instances, all trials of a drawn instance together; {N_BOOT} draws, seed {SEED}]. "
+           f"Default physics unless stated.", ""]
+    for split in _ordered(_field(default, "split"), SPLITS):
+        out += _split_section(split, _select(default, split=split))
+    out += _physics_section(records)
+    out += _failure_section(default)
+    out += _cost_section(records)
+    return "\n".join(out).rstrip("\n") + "\n"
+
+
+def summary_table(records: Iterable[dict]) -> str:
+    """The README's compact table (the ``summary`` marker): per split and category, single view, default physics,
+    the latent method's grasp and functional rates and the baseline with the highest functional rate."""
+    records = [r for r in _validated(records, unique=True)
+               if r["physics"] == DEFAULT_PHYSICS and r["view"] == "single"]
+    rows = []
+    for split in _ordered(_field(records, "split"), SPLITS):
+        for category in _ordered(_field(_select(records, split=split), "category"), CATEGORIES):
+            rs = _select(records, split=split, category=category)
+            latent = _select(rs, method="latent")
+            if not latent:
+                continue
+            best, best_rate = None, -1.0
+            for method in _ordered(_field(rs, "method"), METHODS):
+                if method == "latent" or method in ABLATIONS:
+                    continue
+                f = _outcome(_select(rs, method=method), "functional")
+                if f.mean() > best_rate:  # ties: the earlier method in METHODS
+                    best, best_rate = method, float(f.mean())
+            if best is None:
+                base = ["—", "—"]
+            else:
+                b = _select(rs, method=best)
+                base = [_label(best), _rate(_field(b, "instance"), _outcome(b, "functional"))]
+            inst = _field(latent, "instance")
+            rows.append([f"`{split}`", _category(category), str(len(latent)),
+                         _rate(inst, _outcome(latent, "grasp")), _rate(inst, _outcome(latent, "functional"))] + base)
+    if not rows:
+        return "No single-view benchmark trials."
+    table = _table(("split", "category", "trials", "latent grasp", "latent functional", "best baseline",
+                    "baseline functional"), ("l", "l", "r", "l", "l", "l", "l"), rows)
+    return (table + "\n\n" + f"Single view, default physics; [{100 * LEVEL:.0f} % interval], percentile bootstrap "
+            f"over instances ({N_BOOT} draws, seed {SEED}). Every table: `docs/benchmark.md`.\n")
+
+
+def markdown_tables(records: Iterable[dict]) -> dict[str, str]:
+    """``{marker: Markdown}`` for every marker of :data:`MARKERS`."""
+    records = _validated(records)
+    return {"summary": summary_table(records), "full": benchmark_tables(records)}
+
+
+# ----------------------------------------------------------------------------- Markdown files
+def _regions(text: str, path, names: Iterable[str] | None = None) -> dict[str, tuple[int, int]]:
+    """``{name: (start, end)}`` of the text between each marker pair; InputError if missing or unbalanced."""
+    opens: dict[str, list[re.Match]] = {}
+    closes: dict[str, list[re.Match]] = {}
+    for m in _OPEN.finditer(text):
+        opens.setdefault(m.group(1), []).append(m)
+    for m in _CLOSE.finditer(text):
+        closes.setdefault(m.group(1), []).append(m)
+    wanted = sorted(set(opens) | set(closes)) if names is None else list(names)
+    out = {}
+    for name in wanted:
+        o, c = opens.get(name, []), closes.get(name, [])
+        if not o and not c:
+            raise InputError(f"{path}: no <!-- benchmark:{name} --> marker")
+        if len(o) != 1 or len(c) != 1 or c[0].start() < o[0].end():
+            raise InputError(f"{path}: unbalanced benchmark:{name} markers ({len(o)} opening, {len(c)} closing; "
+                             f"expected one <!-- benchmark:{name} --> before one <!-- /benchmark:{name} -->)")
+        out[name] = (o[0].end(), c[0].start())
+    spans = sorted(out.values())
+    for (s0, e0), (s1, _) in zip(spans, spans[1:]):
+        if s1 < e0:
+            raise InputError(f"{path}: benchmark markers are nested or overlap")
+    for name, (s, e) in out.items():
+        if _OPEN.search(text, s, e) or _CLOSE.search(text, s, e):
+            raise InputError(f"{path}: benchmark:{name} region contains another benchmark marker")
+    return out
+
+
+def _read_markdown(path: Path) -> str:
+    try:
+        return path.read_bytes().decode("utf-8")
+    except (OSError, ValueError) as e:
+        raise InputError(f"{path}: unreadable Markdown file ({one_line(e)})") from None
+
+
+def _replaced(text: str, path, tables_by_marker: Mapping[str, str]) -> str:
+    regions = _regions(text, path, tables_by_marker)
+    for name, (start, end) in sorted(regions.items(), key=lambda kv: -kv[1][0]):
+        text = text[:start] + "\n" + tables_by_marker[name].strip("\n") + "\n" + text[end:]
+    return text
+
+
+def update_markdown(path: str | Path, tables_by_marker: Mapping[str, str]) -> str:
+    """Replace the text between ``<!-- benchmark:<name> -->`` and ``<!-- /benchmark:<name> -->`` for each name.
+
+    Writes atomically (only if something changed) and returns the new text.
+    One-line InputError if a marker is missing or unbalanced; the file is then left untouched.
+    """
+    from catgrasp_drake.core.fileio import atomic_write_text
+
+    path = Path(path)
+    text = _read_markdown(path)
+    new = _replaced(text, path, tables_by_marker)
+    if new != text:
+        atomic_write_text(path, new)
+    return new
+
+
+def _markers_in(text: str, path) -> list[str]:
+    names = [n for n in _regions(text, path) if n in MARKERS]
+    if not names:
+        raise InputError(f"{path}: no benchmark markers (expected <!-- benchmark:NAME --> ... "
+                         f"<!-- /benchmark:NAME --> with NAME in {', '.join(MARKERS)})")
+    return names
+
+
+def check_markdown(path: str | Path, records: Iterable[dict]) -> list[str]:
+    """The markers of ``path`` (among :data:`MARKERS`) whose content differs from what ``records`` give."""
+    path = Path(path)
+    text = _read_markdown(path)
+    names = _markers_in(text, path)
+    regions = _regions(text, path, names)
+    tables = markdown_tables(records)
+    return [n for n in names if text[regions[n][0]:regions[n][1]].strip("\n") != tables[n].strip("\n")]
+
+
+def report(records_paths: str | Path | Iterable[str | Path], markdown_paths: str | Path | Iterable[str | Path],
+           *, write: bool = True) -> dict[str, str]:
+    """Build the tables from the records files and fill every marker found in each Markdown file.
+
+    Returns ``{markdown path: its new text}``; writes the files (atomically) unless ``write`` is False.
+    A Markdown file without any marker of :data:`MARKERS` is an InputError.
+    """
+    from catgrasp_drake.core.fileio import atomic_write_text
+
+    tables = markdown_tables(load_benchmark_records(records_paths))
+    if isinstance(markdown_paths, (str, Path)):
+        markdown_paths = [markdown_paths]
+    new_texts = {}
+    for p in markdown_paths:  # check every file before writing any
+        p = Path(p)
+        text = _read_markdown(p)
+        new_texts[str(p)] = (text, _replaced(text, p, {n: tables[n] for n in _markers_in(text, p)}))
+    if write:
+        for p, (old, new) in new_texts.items():
+            if new != old:
+                atomic_write_text(p, new)
+    return {p: new for p, (_, new) in new_texts.items()}

@@ -1,0 +1,275 @@
+"""Benchmark records files and the Markdown tables: round trips, corruption, markers, determinism."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from catgrasp_drake.benchmark.report import (
+    MARKERS,
+    RECORDS_FORMAT,
+    benchmark_tables,
+    check_markdown,
+    load_benchmark_records,
+    markdown_tables,
+    report,
+    summary_table,
+    update_markdown,
+    write_benchmark_records,
+)
+from catgrasp_drake.errors import InputError, ModelFileError
+
+#: method -> (grasp, functional) success probability of the synthetic trials
+RATES = {"latent": (0.85, 0.65), "nearest": (0.6, 0.3), "rigid": (0.5, 0.2), "true_object": (0.95, 0.85)}
+
+
+def synthetic_records(seed: int = 0) -> list[dict]:
+    """Seeded records shaped like the runner's: two test categories x 4 instances x 2 views x 3 trials, a small
+    ycb split, and the latent method once more under ``friction_0.5`` (its outcomes perturbed)."""
+    rng = np.random.default_rng(seed)
+    out = []
+    cells = [("test", "drill", [f"drill_t{i:02d}" for i in range(4)], 3, ("single", "full")),
+             ("test", "spray_bottle", [f"spray_bottle_t{i:02d}" for i in range(4)], 3, ("single", "full")),
+             ("ycb", "drill", ["ycb_035", "ycb_036"], 2, ("single",))]
+    for split, category, instances, trials, views in cells:
+        for instance in instances:
+            bias = rng.normal(0.0, 0.1)
+            for view in views:
+                for trial in range(trials):
+                    u, v = rng.random(2)  # shared by the methods: paired trials are correlated
+                    for method, (pg, pf) in RATES.items():
+                        if split == "ycb" and method in ("nearest", "true_object"):
+                            continue
+                        settings = ("default", "friction_0.5") if method == "latent" and split == "test" \
+                            else ("default",)
+                        for physics in settings:
+                            jitter = rng.normal(0.0, 0.2) if physics != "default" else 0.0
+                            grasp = bool(u < pg + bias + jitter)
+                            functional = bool(grasp and v < pf / pg)
+                            reason = None if functional else (
+                                "wrong_part" if grasp else str(rng.choice(["slipped", "collision"])))
+                            out.append({
+                                "split": split, "category": category, "instance": instance, "trial": trial,
+                                "view": view, "method": method, "physics": physics, "grasp": grasp,
+                                "functional": functional, "reason": reason, "detail": "",
+                                "confidence": float(rng.random()), "plan_status": "ok",
+                                "placement": {"yaw_deg": float(rng.uniform(-180, 180)), "xyz": [0.0, 0.0, 0.0]},
+                                "camera": {}, "code_version": "synthetic", "seed": seed,
+                                "timings": {"perceive": float(rng.uniform(0.1, 0.3)),
+                                            "estimate": float(rng.uniform(0.05, 2.0)),
+                                            "plan": float(rng.uniform(0.02, 0.1)),
+                                            "execute": float(rng.uniform(3, 6)),
+                                            "total": float(rng.uniform(4, 9)),
+                                            "simulated_s": float(rng.uniform(5, 8))}})
+    return out
+
+
+@pytest.fixture(scope="module")
+def records():
+    return synthetic_records()
+
+
+# ----------------------------------------------------------------------------- records files
+def test_records_round_trip(tmp_path, records):
+    path = tmp_path / "results" / "run.jsonl"
+    write_benchmark_records(path, records)
+    lines = path.read_text().splitlines()
+    header = json.loads(lines[0])
+    assert header["format"] == RECORDS_FORMAT and header["format_version"] == 1
+    assert header["records"] == len(records) == len(lines) - 1
+    assert list(json.loads(lines[1])) == sorted(json.loads(lines[1]))  # keys sorted
+    assert load_benchmark_records(path) == records
+    # several files, or a folder of them, are concatenated
+    write_benchmark_records(tmp_path / "results" / "more.jsonl", records[:5])
+    assert load_benchmark_records([path, tmp_path / "results" / "more.jsonl"]) == records + records[:5]
+    assert len(load_benchmark_records(tmp_path / "results")) == len(records) + 5
+    with pytest.raises(InputError, match="missing fields"):
+        write_benchmark_records(tmp_path / "bad.jsonl", [{"split": "test"}])
+
+
+def _assert_one_line_naming(err, path):
+    msg = str(err.value)
+    assert str(path) in msg and "\n" not in msg
+
+
+def test_corrupted_records_file_names_the_file(tmp_path, records):
+    path = tmp_path / "run.jsonl"
+    write_benchmark_records(path, records[:10])
+    lines = path.read_text().splitlines(keepends=True)
+    line = lines[3]  # the third record: flip its grasp outcome
+    edited = line.replace('"grasp": true', '"grasp": false') if '"grasp": true' in line else \
+        line.replace('"grasp": false', '"grasp": true')
+    assert edited != line
+    path.write_text("".join(lines[:3] + [edited] + lines[4:]))
+    with pytest.raises(ModelFileError, match="checksum mismatch") as err:
+        load_benchmark_records(path)
+    _assert_one_line_naming(err, path)
+
+
+@pytest.mark.parametrize("damage, message", [
+    (lambda lines: lines[:-1], "checksum mismatch"),                     # a record line removed
+    (lambda lines: lines[1:], "no header"),                              # header removed
+    (lambda lines: [lines[0].replace("catgrasp.benchmark_records", "catgrasp.eval_records")] + lines[1:],
+     "expected 'catgrasp.benchmark_records'"),
+    (lambda lines: [lines[0].replace('"format_version": 1', '"format_version": 2')] + lines[1:], "version 2"),
+    (lambda lines: [], "no header"),
+])
+def test_damaged_records_files(tmp_path, records, damage, message):
+    path = tmp_path / "run.jsonl"
+    write_benchmark_records(path, records[:4])
+    path.write_text("".join(damage(path.read_text().splitlines(keepends=True))))
+    with pytest.raises(ModelFileError, match=message) as err:
+        load_benchmark_records(path)
+    _assert_one_line_naming(err, path)
+    with pytest.raises(ModelFileError) as err:
+        load_benchmark_records(tmp_path / "absent.jsonl")
+    _assert_one_line_naming(err, tmp_path / "absent.jsonl")
+
+
+# ----------------------------------------------------------------------------- tables
+def test_tables_are_deterministic(records):
+    first = benchmark_tables(records)
+    assert benchmark_tables(records) == first
+    shuffled = [records[i] for i in np.random.default_rng(1).permutation(len(records))]
+    assert benchmark_tables(shuffled) == first
+    assert summary_table(shuffled) == summary_table(records)
+    assert markdown_tables(records) == {"summary": summary_table(records), "full": first}
+    assert set(markdown_tables(records)) == set(MARKERS)
+
+
+def test_full_tables_structure(records):
+    text = benchmark_tables(records)
+    test_part, ycb_part = text.split("### Split `test`")[1].split("### Split `ycb`")
+    drill_single = test_part.split("**drill, single view**")[1].split("**")[0]
+    rows = [line.split(" | ")[0].lstrip("| ") for line in drill_single.strip().splitlines()[2:]]
+    assert rows == ["latent", "nearest", "rigid", "true-object planner (ablation)"]
+    assert "**drill + spray bottle, single view** (bootstrap stratified by category)" in test_part
+    assert "drill + spray bottle" not in ycb_part.split("### Physics")[0]  # ycb has no spray bottles
+    assert "Latent minus baseline" in test_part and "| drill + spray bottle | single | rigid |" in test_part
+    assert "### Physics sensitivity" in text and "`friction_0.5`" in text
+    assert "### Failure reasons" in text and "`wrong_part`" in text
+    assert "### Cost" in text and f"| all | all | {len(records)} |" in text
+    default_only = [r for r in records if r["physics"] == "default"]
+    assert "### Physics sensitivity" not in benchmark_tables(default_only)
+    assert benchmark_tables([]) == "No benchmark records."
+
+
+def test_known_cells():
+    def rec(instance, trial, method, ok, category="drill"):
+        return {"split": "test", "category": category, "instance": instance, "trial": trial, "view": "single",
+                "method": method, "physics": "default", "grasp": ok, "functional": ok, "reason": None,
+                "timings": {"total": 2.0}}
+
+    rs = [rec(f"drill_t{i:02d}", t, "latent", True) for i in range(10) for t in range(3)]
+    rs += [rec(f"drill_t{i:02d}", t, "rigid", i < 2) for i in range(10) for t in range(3)]
+    rs += [rec(f"drill_t{i:02d}", t, "paper", i < 5) for i in range(10) for t in range(3)]
+    text = benchmark_tables(rs)
+    assert "| latent | 30 | 30/30 (100 %) [100–100 %] | 30/30 (100 %) [100–100 %] | 10 | 2.0 s |" in text
+    table = text.split("**drill, single view**")[1].split("**")[0]
+    assert [line.split(" | ")[0] for line in table.strip().splitlines()[2:]] == ["| latent", "| paper", "| rigid"]
+    # latent minus rigid: +80 pp, the interval excludes 0
+    rigid = [line for line in text.splitlines() if line.startswith("| drill | single | rigid |")][0]
+    assert "| +80 pp [" in rigid and "| yes |" in rigid
+    summary = summary_table(rs)
+    assert "| `test` | drill | 30 | 30/30 (100 %) [100–100 %] | 30/30 (100 %) [100–100 %] | paper | 15/30 (50 %)" \
+        in summary
+
+
+# ----------------------------------------------------------------------------- Markdown files
+DOC = """# Results
+
+Intro text.
+
+<!-- benchmark:summary -->
+old summary
+<!-- /benchmark:summary -->
+
+Between.
+
+<!-- benchmark:full -->
+<!-- /benchmark:full -->
+
+Tail.
+"""
+
+
+def test_update_markdown_round_trip(tmp_path, records):
+    path = tmp_path / "doc.md"
+    path.write_text(DOC)
+    tables = markdown_tables(records)
+    new = update_markdown(path, tables)
+    assert path.read_text() == new
+    assert new.startswith("# Results\n\nIntro text.\n\n<!-- benchmark:summary -->\n| split |")
+    assert "\nBetween.\n" in new and new.endswith("<!-- /benchmark:full -->\n\nTail.\n")
+    assert new.split("<!-- benchmark:full -->\n")[1].split("<!-- /benchmark:full -->")[0] == tables["full"]
+    assert check_markdown(path, records) == []
+    assert update_markdown(path, tables) == new  # idempotent
+    # only the named markers change
+    assert update_markdown(path, {"summary": "x"}).split("<!-- benchmark:full -->")[1] == \
+        new.split("<!-- benchmark:full -->")[1]
+    assert check_markdown(path, records) == ["summary"]
+    path.write_text(path.read_text().replace("x\n<!-- /benchmark:summary", tables["summary"] +
+                                             "<!-- /benchmark:summary"))
+    assert check_markdown(path, records) == []
+    edited = path.read_text().replace("| latent |", "| latent (edited) |", 1)
+    path.write_text(edited)
+    assert check_markdown(path, records) == ["full"]
+
+
+@pytest.mark.parametrize("text, message", [
+    ("# nothing here\n", "no <!-- benchmark:full --> marker"),
+    ("<!-- benchmark:full -->\nno end\n", "unbalanced"),
+    ("<!-- /benchmark:full -->\n<!-- benchmark:full -->\n", "unbalanced"),
+    ("<!-- benchmark:full -->\n<!-- benchmark:full -->\n<!-- /benchmark:full -->\n", "unbalanced"),
+])
+def test_update_markdown_refuses_missing_or_unbalanced_markers(tmp_path, text, message):
+    path = tmp_path / "doc.md"
+    path.write_text(text)
+    with pytest.raises(InputError, match=message) as err:
+        update_markdown(path, {"full": "table"})
+    _assert_one_line_naming(err, path)
+    assert path.read_text() == text  # untouched
+
+
+def test_report_fills_every_file_and_check_agrees(tmp_path, records):
+    results = tmp_path / "results"
+    write_benchmark_records(results / "test.jsonl", [r for r in records if r["split"] == "test"])
+    write_benchmark_records(results / "ycb.jsonl", [r for r in records if r["split"] == "ycb"])
+    readme, doc = tmp_path / "README.md", tmp_path / "benchmark.md"
+    readme_text = "# Project\n\n<!-- benchmark:summary -->\n<!-- /benchmark:summary -->\n"
+    readme.write_text(readme_text)
+    doc.write_text(DOC)
+    dry = report(sorted(results.glob("*.jsonl")), [readme, doc], write=False)
+    assert readme.read_text() == readme_text and doc.read_text() == DOC  # write=False: nothing written
+    out = report(results, [readme, doc])
+    assert out == dry
+    assert out == {str(readme): readme.read_text(), str(doc): doc.read_text()}
+    loaded = load_benchmark_records(results)
+    assert check_markdown(readme, loaded) == [] and check_markdown(doc, loaded) == []
+    assert check_markdown(readme, loaded[:-1]) == ["summary"]
+    assert report(results, [readme, doc]) == out  # same records -> same text
+    plain = tmp_path / "plain.md"
+    plain.write_text("# no markers\n")
+    with pytest.raises(InputError, match="no benchmark markers"):
+        report(results, [readme, plain])
+
+
+def test_imports_without_drake():
+    code = ("import sys; import catgrasp_drake.benchmark.report, catgrasp_drake.benchmark.stats; "
+            "sys.exit(1 if any(m.split('.')[0] == 'pydrake' for m in sys.modules) else 0)")
+    assert subprocess.run([sys.executable, "-c", code]).returncode == 0
+
+
+def test_the_same_trial_twice_is_refused_but_another_seed_is_another_trial(records):
+    with pytest.raises(InputError, match="same trial twice"):
+        benchmark_tables(records + records[:1])
+    with pytest.raises(InputError, match="same trial twice"):
+        summary_table(records + records[:1])
+    reseeded = [r | {"seed": 7} for r in records]
+    text = benchmark_tables(records + reseeded)
+    assert f"| all | all | {2 * len(records)} |" in text
+    assert "| drill | single | rigid | 24 |" in text  # paired within each seed: 12 trials x 2 seeds

@@ -1,0 +1,136 @@
+"""The benchmark's trials: placements, cameras, depth noise, every method in the transfer diagram, a smoke run."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from catgrasp_drake.benchmark.runner import (
+    AZIMUTH_RANGE_DEG,
+    ELEVATION_RANGE_DEG,
+    SHIFT_M,
+    YAW_RANGE_DEG,
+    BenchmarkConfig,
+    run_benchmark,
+    trial_placement,
+    trial_specs,
+)
+from catgrasp_drake.errors import InputError
+from catgrasp_drake.station.scenario import load_scenario
+from catgrasp_drake.systems.object_cloud import _mask_depth
+
+
+def _azimuth_elevation(camera):
+    d = np.asarray(camera.look_at_eye) - np.asarray(camera.look_at_target)
+    return (math.degrees(math.atan2(d[1], d[0])), math.degrees(math.atan2(d[2], math.hypot(d[0], d[1]))),
+            float(np.linalg.norm(d)))
+
+
+def test_placements_vary_within_their_ranges_and_repeat_for_the_same_trial():
+    base = load_scenario("drill_default")
+    az0, _, dist0 = _azimuth_elevation(base.cameras[0])
+    seen_viewpoints, yaws = set(), []
+    for trial in range(12):
+        s, placement, camera = trial_placement(base, "drill_03", trial, seed=0)
+        again = trial_placement(base, "drill_03", trial, seed=0)
+        assert again[1] == placement and again[2] == camera  # a pure function of (instance, trial, seed)
+        assert abs(s.object.yaw_deg - base.object.yaw_deg) <= YAW_RANGE_DEG
+        assert max(abs(s.object.xyz[0] - base.object.xyz[0]), abs(s.object.xyz[1] - base.object.xyz[1])) <= SHIFT_M
+        az, el, dist = _azimuth_elevation(s.cameras[0])
+        assert ELEVATION_RANGE_DEG[0] - 1e-6 <= el <= ELEVATION_RANGE_DEG[1] + 1e-6
+        assert abs((az - az0 + 180) % 360 - 180) <= AZIMUTH_RANGE_DEG + 1e-6
+        assert dist == pytest.approx(dist0)
+        # the camera follows the object's shift
+        shift = np.asarray(s.X_WO()[:3, 3]) - np.asarray(base.X_WO()[:3, 3])
+        np.testing.assert_allclose(np.asarray(s.cameras[0].look_at_target) - base.cameras[0].look_at_target, shift,
+                                   atol=1e-9)
+        assert s.object_cloud.depth_noise_model == "kinect" and s.object_cloud.edge_dropout > 0
+        seen_viewpoints.add(camera["viewpoint"])
+        yaws.append(s.object.yaw_deg)
+    assert seen_viewpoints == {0, 1, 2}
+    assert np.ptp(yaws) > 40  # the trials really differ (not one placement for every trial)
+    other = trial_placement(base, "drill_04", 0, seed=0)[1]
+    assert other != trial_placement(base, "drill_03", 0, seed=0)[1]  # and differ between instances
+    quiet = trial_placement(base, "drill_03", 0, seed=0, noise=False)[0]
+    assert quiet.object_cloud.depth_noise_std == 0.0
+
+
+def test_kinect_noise_grows_with_depth_squared_and_drops_a_few_percent_at_edges():
+    rng = np.random.default_rng(3)
+    label = np.zeros((200, 200), np.int16)
+    label[50:150, 50:150] = 7
+    for z, expected in ((1.0, 0.0015), (2.0, 0.006)):
+        depth = np.full((200, 200), z, np.float32)
+        out = _mask_depth(depth, label, 7, 0.0015, rng, noise_model="kinect", edge_dropout=0.0)
+        kept = out[np.isfinite(out)]
+        assert len(kept) == 100 * 100
+        assert np.std(kept - z) == pytest.approx(expected, rel=0.05)
+    depth = np.full((200, 200), 1.0, np.float32)
+    out = _mask_depth(depth, label, 7, 0.0, rng, noise_model="kinect", edge_dropout=0.5)
+    dropped = 1 - np.isfinite(out).sum() / (100 * 100)
+    assert 0.01 < dropped < 0.05  # 396 silhouette pixels of 10^4, half of them dropped
+    assert np.isfinite(out[60:140, 60:140]).all()  # never inside the silhouette
+    with pytest.raises(InputError, match="noise_model"):
+        _mask_depth(depth, label, 7, 0.001, rng, noise_model="sonar")
+
+
+def test_trial_specs_pair_every_method_on_the_same_trials(tmp_path):
+    cfg = BenchmarkConfig(split="smoke", methods=("latent", "rigid"), data_dir=str(tmp_path / "data"))
+    specs = trial_specs(cfg)
+    assert [(s["instance"], s["method"]) for s in specs] == [
+        ("drill_00", "latent"), ("drill_00", "rigid"), ("drill_01", "latent"), ("drill_01", "rigid")]
+    assert all(s["noise"] and s["physics"] == "default" for s in specs)
+    with pytest.raises(InputError, match="methods"):
+        BenchmarkConfig(methods=("latent", "magic"))
+    with pytest.raises(InputError, match="split"):
+        BenchmarkConfig(split="train")
+
+
+@pytest.mark.slow
+def test_smoke_benchmark_runs_the_transfer_diagram_and_records_every_trial(tmp_path):
+    from catgrasp_drake.benchmark.report import load_benchmark_records, summary_table, write_benchmark_records
+
+    cfg = BenchmarkConfig(split="smoke", methods=("latent",), data_dir=str(tmp_path / "data"),
+                          cache_dir=str(tmp_path / "cache"), workers=0)
+    records = run_benchmark(cfg)
+    assert len(records) == 2
+    for r in records:
+        assert r["reason"] not in ("task_error", "worker_died"), r["detail"]
+        assert r["plan_status"] == "ok"
+        assert r["num_points"] > 300 and 0 < r["confidence"] <= 1
+        assert r["timings"]["simulated_s"] > 5
+        assert r["pose_error_mm"] < 30  # the fit found the drill
+    path = tmp_path / "smoke.jsonl"
+    write_benchmark_records(path, records)
+    assert load_benchmark_records(path) == records
+    assert "`smoke` | drill | 2 |" in summary_table(records)
+    again = run_benchmark(cfg)  # cached: the same records, nothing re-simulated
+    assert [r["grasp"] for r in again] == [r["grasp"] for r in records]
+    assert [r["timings"] for r in again] == [r["timings"] for r in records]
+
+
+def test_physics_settings_change_the_station_they_name():
+    from pydrake.systems.framework import DiagramBuilder
+
+    from catgrasp_drake.benchmark.runner import SVH_STRENGTH_FACTOR, with_physics
+    from catgrasp_drake.station.builder import add_station
+
+    def station(physics):
+        h = add_station(DiagramBuilder(), with_physics(load_scenario("drill_default"), physics))
+        hand = [h.plant.get_joint_actuator(i).effort_limit() for i in h.plant.GetJointActuatorIndices(h.hand)]
+        arm = [h.plant.get_joint_actuator(i).effort_limit() for i in h.plant.GetJointActuatorIndices(h.arm)]
+        inspector = h.scene_graph.model_inspector()
+        mu = {inspector.GetProximityProperties(g).GetProperty("material", "coulomb_friction").static_friction()
+              for g in h.plant.GetCollisionGeometriesForBody(h.object_body)}
+        return np.array(hand), np.array(arm), mu, h.plant.time_step()
+
+    hand0, arm0, mu0, dt0 = station("default")
+    hand1, arm1, _, _ = station("effort_1.0x")
+    np.testing.assert_allclose(hand1, hand0 / SVH_STRENGTH_FACTOR)
+    np.testing.assert_array_equal(arm1, arm0)  # the arm is not weakened
+    assert station("friction_0.5")[2] == {0.5} and mu0 == {0.9}
+    assert station("time_step_1e-3")[3] == 1e-3 and dt0 == 5e-3
+    with pytest.raises(InputError, match="physics"):
+        with_physics(load_scenario("drill_default"), "zero_gravity")
