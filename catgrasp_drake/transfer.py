@@ -227,7 +227,9 @@ def make_transfer_diagram(scenario: Scenario, model: CategoryModel, meshcat: Mes
     for port in ("x", "X_WO", "scale"):
         builder.Connect(estimator.GetOutputPort(port), regressor.GetInputPort(port))
     if method == "cpd":
-        builder.Connect(cloud_port, regressor.GetInputPort("observed_cloud_W"))
+        # the estimate's copy of the cloud (state), not the camera's port: the camera renders every step,
+        # which would re-run CPD and the planner at every step
+        builder.Connect(estimator.GetOutputPort("observed_cloud_W"), regressor.GetInputPort("observed_cloud_W"))
         builder.Connect(estimator.GetOutputPort("completed_cloud_W"), regressor.GetInputPort("completed_cloud_W"))
     planning = make_planning_model(scenario)
     generator = builder.AddNamedSystem("grasp_trajectory", MotionTrajectoryGenerator(

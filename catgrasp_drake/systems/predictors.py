@@ -46,7 +46,9 @@ class GraspPredictor(LeafSystem):
         X_WO: ``RigidTransform``, pose of the canonical frame O in the world W.
         scale: (1,) uniform scale of the canonical shape (1 if unconnected).
         observed_cloud_W, completed_cloud_W: ``PointCloud`` (W, metres), declared
-            for the ``cpd`` method only (its field registers one onto the other).
+            for the ``cpd`` method only (its field registers one onto the other);
+            connect the estimator's outputs (fixed once estimated), not a camera's
+            port, or the prediction and the plan are recomputed at every step.
     Output ports:
         grasp_motion_W: ``GraspMotion`` (``frame == "world"``): control poses
             X_WH of the hand base H, metres, and the hand postures. If the

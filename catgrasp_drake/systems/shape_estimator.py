@@ -140,6 +140,8 @@ class LatentShapeEstimator(LeafSystem):
         X_WO: ``RigidTransform``, rigid part of the fitted pose of the canonical frame O in W.
         scale: (1,) uniform scale s of the canonical shape.
         completed_cloud_W: ``PointCloud``, the completed shape in W (metres).
+        observed_cloud_W: ``PointCloud``, the cloud the fit used (W, metres): unlike the
+            camera's port it does not change while the simulation steps.
         energy: (1,) final fit energy (negative log-likelihood + prior).
         confidence: (1,) in [0, 1]; 0 when there is no estimate.
         estimate: ``ShapeEstimate`` (everything above plus status and timings).
@@ -171,6 +173,9 @@ class LatentShapeEstimator(LeafSystem):
                                      prerequisites_of_calc=state_only)
         self.DeclareAbstractOutputPort("completed_cloud_W", lambda: AbstractValue.Make(PointCloud()),
                                        lambda c, o: o.set_value(cloud_from_points(self._get(c).completed_W)),
+                                       prerequisites_of_calc=state_only)
+        self.DeclareAbstractOutputPort("observed_cloud_W", lambda: AbstractValue.Make(PointCloud()),
+                                       lambda c, o: o.set_value(cloud_from_points(self._get(c).observed_W)),
                                        prerequisites_of_calc=state_only)
         self.DeclareVectorOutputPort("energy", 1, lambda c, o: o.SetFromVector([self._get(c).energy]),
                                      prerequisites_of_calc=state_only)
