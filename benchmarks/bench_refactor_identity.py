@@ -52,7 +52,7 @@ def _category(instance: str) -> str:
 def handwritten_entry(instance: str) -> dict:
     from catgrasp_drake.station.handwritten import load_handwritten_motion
     from catgrasp_drake.station.scenario import load_scenario, with_instance
-    from catgrasp_drake.station.trial import plan_for, run_grasp_trial, trial_diagram
+    from catgrasp_drake.trial import plan_for, run_grasp_trial, trial_diagram
 
     category = _category(instance)
     scenario = with_instance(load_scenario(f"{category}_default"), instance)

@@ -19,7 +19,7 @@ import time
 from catgrasp_drake.station.builder import make_station
 from catgrasp_drake.station.handwritten import load_handwritten_motion
 from catgrasp_drake.station.scenario import PlantSpec, load_scenario
-from catgrasp_drake.station.trial import run_grasp_trial, trial_diagram
+from catgrasp_drake.trial import run_grasp_trial, trial_diagram
 
 log = logging.getLogger("bench_station")
 

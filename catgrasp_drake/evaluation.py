@@ -11,7 +11,7 @@ same placement, view and seed for each method.
 A trial is one task of :func:`catgrasp_drake.runner.run_tasks` (parallel
 workers, on-disk cache keyed by spec and code version, so an interrupted run
 resumes without redoing finished trials): observe -> predict -> execute
-(:func:`catgrasp_drake.station.trial.run_grasp_trial`, the predicted world
+(:func:`catgrasp_drake.trial.run_grasp_trial`, the predicted world
 motion expressed in the true object frame) -> judge. Fold models are trained
 with :func:`catgrasp_drake.training.train_category` and kept under the output
 folder (re-used when present), their grasp trials cached in ``<out_dir>/training_trials``.
@@ -101,7 +101,7 @@ def eval_trial_task(spec: dict) -> dict:
     from catgrasp_drake.baselines import predict_grasp
     from catgrasp_drake.category_model import CategoryModel
     from catgrasp_drake.station.scenario import load_scenario, random_placement, with_instance
-    from catgrasp_drake.station.trial import run_grasp_trial
+    from catgrasp_drake.trial import run_grasp_trial
     from catgrasp_drake.transfer import observe
 
     model = CategoryModel.load(spec["model"], category=spec["category"])

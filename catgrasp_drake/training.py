@@ -13,7 +13,7 @@
    functional point; sample 0 is the
    warped motion itself), drop those violating the functional constraint
    (``grasping.constraints``, judged with the instance's annotations), run
-   the rest as grasp trials in the station (``station.trial``; motions whose
+   the rest as grasp trials in the station (``catgrasp_drake.trial``; motions whose
    arm plan collides or is unreachable are rejected there before any
    simulation), in parallel worker processes with an on-disk cache
    (``runner``).
@@ -48,7 +48,9 @@ _ROOT = Path(__file__).resolve().parents[1]
 #: Files whose contents decide a trial's outcome: the trial cache is keyed by their hash.
 TRIAL_CODE_PATHS = (
     _ROOT / "catgrasp_drake" / "station",
-    _ROOT / "catgrasp_drake" / "systems" / "trajectory_generator.py",
+    _ROOT / "catgrasp_drake" / "planning",
+    _ROOT / "catgrasp_drake" / "systems" / "grasp_execution.py",
+    _ROOT / "catgrasp_drake" / "trial.py",
     _ROOT / "catgrasp_drake" / "robot",
     _ROOT / "catgrasp_drake" / "grasping" / "motion.py",
     _ROOT / "models" / "svh",
@@ -94,7 +96,7 @@ class TrainingConfig:
 def grasp_trial_task(spec: dict) -> dict:
     """Worker task: one grasp trial of ``spec["motion"]`` (object frame) on one instance."""
     from catgrasp_drake.station.scenario import load_scenario
-    from catgrasp_drake.station.trial import run_grasp_trial
+    from catgrasp_drake.trial import run_grasp_trial
 
     base = load_scenario(spec["scenario"])
     scenario = base.replace(name=f"{spec['scenario']}:{spec['instance']}",

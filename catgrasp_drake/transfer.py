@@ -7,7 +7,7 @@ adds to the station's ``DiagramBuilder``::
         DepthImageToPointCloud, crop, voxel grid)   [view="full": 4 cameras, merged]
       -> shape_estimator (LatentShapeEstimator: x, X_WO, scale, completed cloud, confidence)
       -> grasp_regressor (GraspRegressor: grasp motion in W)
-      -> grasp_trajectory (MotionTrajectoryGenerator: IK plan, arm/hand desired states)
+      -> grasp_trajectory (MotionPlanner: IK plan, arm/hand desired states)
       -> plant (PD-gained actuators of the UR10 and the SVH hand)
 
 and, with Meshcat, ``transfer_visualizer`` (observed cloud, completed shape,
@@ -20,8 +20,9 @@ each stage, and judges the outcome with the station's judge.
 
 from __future__ import annotations
 
+import functools
 import time
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -33,15 +34,20 @@ from pydrake.systems.framework import DiagramBuilder, EventStatus, LeafSystem
 from pydrake.systems.primitives import ConstantValueSource
 
 from catgrasp_drake.category_model import CategoryModel
+from catgrasp_drake.data.dataset import instance_mesh_path
 from catgrasp_drake.errors import InputError
-from catgrasp_drake.station.builder import StationHandles, add_station, make_planning_model
-from catgrasp_drake.station.scenario import CameraSpec, Scenario
-from catgrasp_drake.station.trial import judge_spec, simulate_and_judge
+from catgrasp_drake.perception.object_cloud import cloud_from_points, points_from_cloud
+from catgrasp_drake.planning.model import make_planning_model
+from catgrasp_drake.planning.records import PlanParams, hold_plan
 from catgrasp_drake.prediction import ESTIMATORS, check_method, rigid_space
-from catgrasp_drake.systems.object_cloud import cloud_from_points, points_from_cloud
+from catgrasp_drake.robot.models import ARM_JOINTS, HAND_BASE_LINK
+from catgrasp_drake.station.builder import StationHandles, add_station, make_station
+from catgrasp_drake.station.scenario import CameraSpec, Scenario
+from catgrasp_drake.systems.grasp_execution import MotionPlanner, placeholder_motion_W
 from catgrasp_drake.systems.predictors import GraspPredictor
 from catgrasp_drake.systems.shape_estimator import LatentShapeEstimator, ShapeEstimate
-from catgrasp_drake.systems.trajectory_generator import MotionTrajectoryGenerator, PlanParams
+from catgrasp_drake.trial import judge_spec, pose_tuple, simulate_and_judge
+from catgrasp_drake.viz.meshcat_tools import COLORS, draw_cloud, draw_triad
 
 VIEWS = ("single", "full")
 #: Cameras of the "full" view: on a ring around the object, this far (m) and this high (deg).
@@ -96,8 +102,6 @@ class TransferVisualizer(LeafSystem):
 
     def __init__(self, meshcat: Meshcat, planning_model):
         super().__init__()
-        from catgrasp_drake.systems.trajectory_generator import hold_plan, placeholder_motion_W
-
         self._meshcat = meshcat
         self._planning = planning_model
         self._cloud = self.DeclareAbstractInputPort("object_cloud_W", AbstractValue.Make(PointCloud()))
@@ -116,8 +120,6 @@ class TransferVisualizer(LeafSystem):
 
 def hand_path_W(planning_model, plan) -> np.ndarray:
     """Positions (K, 3) of the hand base in W at the plan's arm knots (forward kinematics, planning model)."""
-    from catgrasp_drake.robot.models import ARM_JOINTS, HAND_BASE_LINK
-
     plant = planning_model.plant
     ctx = plant.CreateDefaultContext()
     frame = plant.GetFrameByName(HAND_BASE_LINK, planning_model.hand)
@@ -132,8 +134,6 @@ def hand_path_W(planning_model, plan) -> np.ndarray:
 
 def draw_transfer(meshcat: Meshcat, observed_W, estimate: ShapeEstimate, motion_W, plan, planning_model) -> None:
     """Observed cloud, completed shape, control-pose triads and planned hand path under ``/transfer``."""
-    from catgrasp_drake.viz.meshcat_tools import COLORS, draw_cloud, draw_triad
-
     meshcat.Delete("/transfer")
     if len(observed_W):
         draw_cloud(meshcat, "/transfer/observed", observed_W, COLORS["observed"])
@@ -154,7 +154,7 @@ class TransferDiagram:
     station: StationHandles
     estimator: LatentShapeEstimator
     regressor: GraspPredictor
-    generator: MotionTrajectoryGenerator
+    generator: MotionPlanner
     cloud_port: object  # the output port feeding the estimator
     view: str
     model: CategoryModel
@@ -164,9 +164,7 @@ class TransferDiagram:
 
 def true_object_points_W(scenario: Scenario) -> np.ndarray:
     """Vertices (N, 3) of the scenario's true object mesh at its initial pose, in W (the ablation's obstacle)."""
-    import trimesh
-
-    from catgrasp_drake.data.dataset import instance_mesh_path
+    import trimesh  # deferred: heavy, and only the true-object ablation needs it
 
     o = scenario.object
     if o.primitive is not None or o.instance is None:
@@ -216,7 +214,7 @@ def make_transfer_diagram(scenario: Scenario, model: CategoryModel, meshcat: Mes
             raise InputError(f"camera {name!r} not in scenario {scenario.name!r}; cameras: {sorted(h.cameras)}")
         cloud_port = h.object_clouds[name].GetOutputPort("object_cloud_W")
         if setup.visibility:
-            builder.Connect(h.cameras[name].body_pose_in_world_output_port(), estimator.GetInputPort("camera_pose"))
+            builder.Connect(h.cameras[name].body_pose_in_world_output_port(), estimator.GetInputPort("X_WC"))
     else:
         merger = builder.AddNamedSystem("cloud_merger", CloudMerger(len(h.cameras)))
         for i, name in enumerate(h.cameras):
@@ -232,8 +230,9 @@ def make_transfer_diagram(scenario: Scenario, model: CategoryModel, meshcat: Mes
         builder.Connect(estimator.GetOutputPort("observed_cloud_W"), regressor.GetInputPort("observed_cloud_W"))
         builder.Connect(estimator.GetOutputPort("completed_cloud_W"), regressor.GetInputPort("completed_cloud_W"))
     planning = make_planning_model(scenario)
-    generator = builder.AddNamedSystem("grasp_trajectory", MotionTrajectoryGenerator(
-        h.plant, h.arm, h.hand, planning, params=params, min_confidence=min_confidence))
+    generator = builder.AddNamedSystem("grasp_trajectory", MotionPlanner(
+        h.plant, h.arm, h.hand, planning, obstacle_model=functools.partial(make_planning_model, scenario),
+        params=params, min_confidence=min_confidence))
     builder.Connect(regressor.GetOutputPort("grasp_motion_W"), generator.GetInputPort("grasp_motion_W"))
     builder.Connect(estimator.GetOutputPort("confidence"), generator.GetInputPort("confidence"))
     if method == "true_object":
@@ -280,13 +279,7 @@ class TransferResult:
     judge: dict = field(default_factory=dict)
 
     def to_dict(self) -> dict:
-        from dataclasses import asdict
-
         return asdict(self)
-
-
-def _tuple(X) -> tuple:
-    return tuple(tuple(round(float(v), 9) for v in row) for row in np.asarray(X))
 
 
 def run_transfer(td: TransferDiagram, *, record_html=None, return_context: bool = False):
@@ -322,14 +315,11 @@ def run_transfer(td: TransferDiagram, *, record_html=None, return_context: bool 
     X_true = h.scenario.X_WO()
     base = dict(category=td.model.category, instance=h.scenario.object.instance, view=td.view,
                 plan_status=plan.status, confidence=float(estimate.confidence), scale=float(estimate.scale),
-                X_WO_estimated=_tuple(estimate.X_WO), X_WO_true=_tuple(X_true),
+                X_WO_estimated=pose_tuple(estimate.X_WO), X_WO_true=pose_tuple(X_true),
                 num_observed_points=int(len(observed)))
     if not plan.ok:
-        reason = plan.status.split(":")[0]
-        reason = {"collision": "collision_before_closing", "ik_failed": "unreachable",
-                  "branch_flip": "unreachable"}.get(reason, reason)
         timings["total"] = time.perf_counter() - t_all
-        result = TransferResult(grasp_success=False, functional_success=False, failure_reason=reason,
+        result = TransferResult(grasp_success=False, functional_success=False, failure_reason=plan.failure_reason,
                                 detail=plan.status, object_rise_m=0.0, object_tilt_deg=0.0, timings=timings, **base)
         return (result, context) if return_context else result
     t0 = time.perf_counter()
@@ -355,8 +345,6 @@ def observe(scenario: Scenario, view: str = "single", camera: str | None = None)
     the visibility-aware fit); "full": ``FULL_VIEW_CAMERAS`` ring cameras,
     clouds merged, no camera position. Renders once, simulates nothing.
     """
-    from catgrasp_drake.station.builder import make_station
-
     if view not in VIEWS:
         raise InputError(f"view: expected one of {VIEWS}, got {view!r}")
     if view == "full":

@@ -19,7 +19,7 @@ from pathlib import Path
 from catgrasp_drake.core.fileio import atomic_write_text
 from catgrasp_drake.station.handwritten import load_handwritten_motion
 from catgrasp_drake.station.scenario import load_scenario
-from catgrasp_drake.station.trial import run_grasp_trial
+from catgrasp_drake.trial import run_grasp_trial
 from catgrasp_drake.viz.meshcat_tools import start_meshcat
 
 log = logging.getLogger("execute_grasp")

@@ -28,9 +28,9 @@ def main(argv=None) -> int:
     from catgrasp_drake.category_model import CategoryModel
     from catgrasp_drake.evaluation import load_records
     from catgrasp_drake.robot.models import ARM_JOINTS
-    from catgrasp_drake.station.builder import hand_joint_angles
+    from catgrasp_drake.robot.models import hand_joint_angles
     from catgrasp_drake.station.scenario import load_scenario, random_placement, with_instance
-    from catgrasp_drake.station.trial import plan_for, trial_diagram
+    from catgrasp_drake.trial import plan_for, trial_diagram
     from catgrasp_drake.transfer import observe
     from catgrasp_drake.viz.render import contact_sheet, rgb_array
 

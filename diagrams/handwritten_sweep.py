@@ -33,7 +33,7 @@ def sweep_task(spec: dict) -> dict:
     """One trial: ``{"category", "instance"}`` -> JSON-able outcome (module-level: runs in workers)."""
     from catgrasp_drake.station.handwritten import load_handwritten_motion
     from catgrasp_drake.station.scenario import load_scenario
-    from catgrasp_drake.station.trial import run_grasp_trial
+    from catgrasp_drake.trial import run_grasp_trial
 
     category, instance = spec["category"], spec["instance"]
     base = load_scenario(f"{category}_default")

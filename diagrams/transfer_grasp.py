@@ -12,7 +12,7 @@ What it does, step by step (the same builder serves ``catgrasp demo`` and the te
    instance and moved to a seeded random yaw and position;
 3. ``make_transfer_diagram``: station (plant, scene graph, UR10 + SVH hand,
    table, object, RgbdSensor) + object cloud + LatentShapeEstimator +
-   GraspRegressor + MotionTrajectoryGenerator, wired into one Diagram;
+   GraspRegressor + MotionPlanner, wired into one Diagram;
 4. simulate it with a plain ``Simulator``: the estimator's initialization
    event fits the shape to the camera's cloud, the regressor and the planner
    follow through Drake's caches, the PD-gained actuators execute;
@@ -36,7 +36,7 @@ def main(argv=None) -> int:
     from catgrasp_drake.core.fileio import atomic_write_bytes
     from catgrasp_drake.demo import default_model_path, pick_novel_instance
     from catgrasp_drake.station.scenario import load_scenario, random_placement, with_instance
-    from catgrasp_drake.station.trial import judge_spec, simulate_and_judge
+    from catgrasp_drake.trial import judge_spec, simulate_and_judge
     from catgrasp_drake.transfer import make_transfer_diagram
     from catgrasp_drake.viz.meshcat_tools import start_meshcat
 

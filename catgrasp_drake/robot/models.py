@@ -249,6 +249,32 @@ def hand_mimic_joints() -> dict[str, tuple[str, float, float]]:
     return {name: row["mimic"] for name, row in _hand_joint_table().items() if row["mimic"] is not None}
 
 
+def hand_joint_angles(q_hand: np.ndarray) -> dict[str, float]:
+    """All hand joint angles (actuated + mimic followers) for a 9-vector posture (``HAND_ACTUATED_JOINTS`` order).
+
+    The one place the mimic relation (follower = multiplier * leader + offset) is resolved.
+    """
+    angles = {name: float(q) for name, q in zip(HAND_ACTUATED_JOINTS, q_hand)}
+    mimic = hand_mimic_joints()
+    for _ in range(len(mimic)):  # followers of followers resolve in a few passes
+        for follower, (leader, multiplier, offset) in mimic.items():
+            if leader in angles:
+                angles[follower] = multiplier * angles[leader] + offset
+    return angles
+
+
+def set_hand_angles(plant: MultibodyPlant, context, hand: ModelInstanceIndex, q_hand: np.ndarray) -> None:
+    """Set every hand joint (actuated + mimic followers) in ``context`` for the posture ``q_hand``."""
+    for name, q in hand_joint_angles(q_hand).items():
+        plant.GetJointByName(name, hand).set_angle(context, q)
+
+
+def set_hand_default_posture(plant: MultibodyPlant, hand: ModelInstanceIndex, q_hand: np.ndarray) -> None:
+    """Default angles of all hand joints for the posture ``q_hand`` (HAND_ACTUATED_JOINTS order)."""
+    for name, q in hand_joint_angles(q_hand).items():
+        plant.GetJointByName(name, hand).set_default_angle(q)
+
+
 def hand_links() -> tuple[str, ...]:
     """Names of all hand bodies (same as ``HAND_LINKS``)."""
     return HAND_LINKS

@@ -62,6 +62,7 @@ from pydrake.geometry import (
     RenderCameraCore,
     RenderEngineVtkParams,
     Role,
+    RoleAssign,
     SceneGraph,
 )
 from pydrake.math import RigidTransform
@@ -72,13 +73,21 @@ from pydrake.multibody.plant import (
     MultibodyPlant,
     MultibodyPlantConfig,
 )
-from pydrake.multibody.tree import ModelInstanceIndex, RigidBody, SpatialInertia, UnitInertia
+from pydrake.multibody.tree import JointActuatorIndex, ModelInstanceIndex, RigidBody, SpatialInertia, UnitInertia
 from pydrake.systems.framework import Diagram, DiagramBuilder, LeafSystem
 from pydrake.systems.sensors import CameraInfo, RgbdSensor
 
+from catgrasp_drake.data.dataset import instance_sdf_url
 from catgrasp_drake.errors import InputError
+from catgrasp_drake.perception.object_cloud import ObjectCloudSystem
+from catgrasp_drake.robot.models import (
+    add_arm_and_hand,
+    hand_posture_categories,
+    load_hand_postures,
+    make_parser,
+    set_hand_default_posture,
+)
 from catgrasp_drake.station.scenario import CameraSpec, Scenario
-from catgrasp_drake.systems.object_cloud import ObjectCloudSystem
 
 RENDERER_NAME = "catgrasp_vtk"
 TABLE_INSTANCE = "table"
@@ -133,7 +142,7 @@ class BodyPoseSelector(LeafSystem):
 
 
 # ----------------------------------------------------------------------------- pieces
-def _plant_config(scenario: Scenario) -> MultibodyPlantConfig:
+def plant_config(scenario: Scenario) -> MultibodyPlantConfig:
     p = scenario.plant
     return MultibodyPlantConfig(time_step=p.time_step,
                                 discrete_contact_approximation=p.discrete_contact_approximation,
@@ -141,7 +150,7 @@ def _plant_config(scenario: Scenario) -> MultibodyPlantConfig:
                                 penetration_allowance=p.penetration_allowance)
 
 
-def _add_table(plant: MultibodyPlant, scenario: Scenario) -> ModelInstanceIndex:
+def add_table(plant: MultibodyPlant, scenario: Scenario) -> ModelInstanceIndex:
     t = scenario.table
     instance = plant.AddModelInstance(TABLE_INSTANCE)
     body = plant.AddRigidBody("top", instance, SpatialInertia(10.0, np.zeros(3), UnitInertia.SolidBox(*t.size)))
@@ -185,8 +194,6 @@ def _add_object(plant: MultibodyPlant, parser, scenario: Scenario) -> ModelInsta
     o = scenario.object
     if o.primitive is not None:
         return _add_primitive_object(plant, scenario)
-    from catgrasp_drake.data.dataset import instance_sdf_url
-
     if o.model_dir is not None:
         (instance,) = parser.AddModels(o.sdf_file())
     else:
@@ -198,15 +205,11 @@ def _apply_physics_knobs(plant: MultibodyPlant, scene_graph: SceneGraph, scenari
     """``PlantSpec.hand_effort_scale`` (hand effort limits scaled) and ``object_friction`` (replaced)."""
     p = scenario.plant
     if p.hand_effort_scale != 1.0:
-        from pydrake.multibody.tree import JointActuatorIndex
-
         for i in range(plant.num_actuators()):  # (GetJointActuatorIndices is empty before Finalize)
             actuator = plant.get_mutable_joint_actuator(JointActuatorIndex(i))
             if actuator.model_instance() == hand:
                 actuator.set_effort_limit(actuator.effort_limit() * p.hand_effort_scale)
     if p.object_friction is not None:
-        from pydrake.geometry import RoleAssign
-
         inspector = scene_graph.model_inspector()
         for body_index in plant.GetBodyIndices(obj):
             for gid in plant.GetCollisionGeometriesForBody(plant.get_body(body_index)):
@@ -253,29 +256,8 @@ def _add_camera(builder: DiagramBuilder, handles: StationHandles, spec: CameraSp
     handles.object_clouds[spec.name] = cloud
 
 
-def hand_joint_angles(q_hand: np.ndarray) -> dict[str, float]:
-    """All hand joint angles (actuated + mimic followers) for a 9-vector posture."""
-    from catgrasp_drake.robot.models import HAND_ACTUATED_JOINTS, hand_mimic_joints
-
-    angles = {name: float(q) for name, q in zip(HAND_ACTUATED_JOINTS, q_hand)}
-    mimic = hand_mimic_joints()
-    for _ in range(len(mimic)):  # followers of followers resolve in a few passes
-        for follower, (leader, multiplier, offset) in mimic.items():
-            if leader in angles:
-                angles[follower] = multiplier * angles[leader] + offset
-    return angles
-
-
-def set_hand_default_posture(plant: MultibodyPlant, hand: ModelInstanceIndex, q_hand: np.ndarray) -> None:
-    """Default angles of all hand joints for the posture ``q_hand`` (HAND_ACTUATED_JOINTS order)."""
-    for name, q in hand_joint_angles(q_hand).items():
-        plant.GetJointByName(name, hand).set_default_angle(q)
-
-
 def posture_category(scenario: Scenario) -> str:
     """The hand-posture set of the scenario's object (``cylinder`` for primitives and categories without one)."""
-    from catgrasp_drake.robot.models import hand_posture_categories
-
     category = scenario.object.category
     return category if category in hand_posture_categories() else "cylinder"
 
@@ -290,15 +272,13 @@ def add_station(builder: DiagramBuilder, scenario: Scenario, meshcat: Meshcat | 
     ``Meshcat(MeshcatParams(host="localhost", port=0))``) a MeshcatVisualizer
     and a ContactVisualizer are added.
     """
-    from catgrasp_drake.robot.models import add_arm_and_hand, load_hand_postures, make_parser
-
     if not isinstance(scenario, Scenario):
         raise InputError(f"scenario: expected a Scenario, got {type(scenario).__name__}")
-    plant, scene_graph = AddMultibodyPlant(_plant_config(scenario), builder)
+    plant, scene_graph = AddMultibodyPlant(plant_config(scenario), builder)
     plant.set_name("plant")
     scene_graph.set_name("scene_graph")
     parser = make_parser(plant)
-    table = _add_table(plant, scenario)
+    table = add_table(plant, scenario)
     arm_hand = add_arm_and_hand(plant, parser, X_W_ArmBase=RigidTransform(scenario.arm_base.matrix()))
     arm, hand = arm_hand.arm, arm_hand.hand
     obj = _add_object(plant, parser, scenario)
@@ -365,42 +345,3 @@ def make_station(scenario: Scenario, meshcat: Meshcat | None = None) -> Diagram:
     diagram = builder.Build()
     diagram.set_name("station")
     return diagram
-
-
-def make_planning_model(scenario: Scenario, obstacle_W=None):
-    """The robot's planning model of ``scenario``: table + arm + hand, no cameras, and the object as perceived.
-
-    ``obstacle_W`` (N, 3) world points of the object as the robot knows it
-    (e.g. the estimator's completed shape) become one welded body
-    ``perceived_object`` with their convex hull as collision geometry; the
-    planner keeps the arm clear of it on the way to the pregrasp (the reach
-    itself is allowed to touch it). None: no object in the model. Returns a
-    ``PlanningModel`` (``catgrasp_drake.systems.trajectory_generator``); the
-    arm starts at ``scenario.arm_q_home``, the hand open.
-    """
-    from pydrake.geometry import Convex
-
-    from catgrasp_drake.robot.models import add_arm_and_hand, load_hand_postures, make_parser
-    from catgrasp_drake.systems.trajectory_generator import PlanningModel
-
-    builder = DiagramBuilder()
-    plant, scene_graph = AddMultibodyPlant(_plant_config(scenario), builder)
-    parser = make_parser(plant)
-    table = _add_table(plant, scenario)
-    arm_hand = add_arm_and_hand(plant, parser, X_W_ArmBase=RigidTransform(scenario.arm_base.matrix()))
-    obstacle = None
-    if obstacle_W is not None and len(obstacle_W) >= 4:
-        obstacle = plant.AddModelInstance("perceived_object")
-        body = plant.AddRigidBody("body", obstacle, SpatialInertia(1.0, np.zeros(3), UnitInertia.SolidSphere(0.05)))
-        plant.WeldFrames(plant.world_frame(), body.body_frame(), RigidTransform())
-        props = ProximityProperties()
-        AddContactMaterial(dissipation=5.0, point_stiffness=1e5, friction=CoulombFriction(0.5, 0.5),
-                           properties=props)
-        plant.RegisterCollisionGeometry(body, RigidTransform(), Convex(np.asarray(obstacle_W, float).T, "hull"),
-                                        "hull", props)
-    plant.Finalize()
-    set_hand_default_posture(plant, arm_hand.hand, load_hand_postures(posture_category(scenario))["open"])
-    diagram = builder.Build()
-    diagram.set_name("planning_model")
-    return PlanningModel(diagram, plant, scene_graph, arm_hand.arm, arm_hand.hand, table,
-                         np.asarray(scenario.arm_q_home, float), scenario, obstacle)

@@ -1,10 +1,10 @@
 """Grasp and functional-grasp success from contacts and poses (DESIGN.md section 6).
 
 Pure functions over small records (numpy only), so the rules are unit-testable
-without a simulation. ``catgrasp_drake.station.trial`` fills the records from
+without a simulation. ``catgrasp_drake.trial`` fills the records from
 the simulation (``ContactResults``, the object's pose X_WO and the hand base
 pose X_WH) at the phase boundaries of the plan
-(:class:`catgrasp_drake.systems.trajectory_generator.Timeline`):
+(:class:`catgrasp_drake.planning.records.Timeline`):
 
 - ``initial``: start of the simulation;
 - ``before_close``: the hand at the grasp pose, fingers still in preshape

@@ -165,7 +165,7 @@ class ObjectCloudSpec:
     crop_max: tuple[float, float, float] = (1.5, 1.0, 1.0)
     depth_noise_std: float = 0.0  # m; "kinect": the axial std at 1 m (it grows with depth squared)
     seed: int = 0
-    depth_noise_model: str = "gaussian"  # or "kinect" (systems.object_cloud._mask_depth)
+    depth_noise_model: str = "gaussian"  # or "kinect" (perception.object_cloud._mask_depth)
     edge_dropout: float = 0.0  # "kinect": probability of dropping a silhouette / depth-jump pixel
 
 

@@ -35,7 +35,7 @@ from catgrasp_drake.core.inference import InferenceResult, infer_latent_pose
 from catgrasp_drake.core.shape_space import ShapeSpace
 from catgrasp_drake.core.validation import real_array, vector3
 from catgrasp_drake.errors import CatgraspError, InputError
-from catgrasp_drake.systems.object_cloud import cloud_from_points, points_from_cloud
+from catgrasp_drake.perception.object_cloud import cloud_from_points, points_from_cloud
 
 #: Fewer observed points than this: no estimate ("no object in view").
 MIN_OBSERVED_POINTS = 30
@@ -130,9 +130,25 @@ def estimate_on_table(space: ShapeSpace, p_W: np.ndarray, X_WT: np.ndarray, *, c
 class LatentShapeEstimator(LeafSystem):
     """Latent shape x and object pose from the object's point cloud (module docstring: frames, events).
 
+    .. pydrake_system::
+
+        name: LatentShapeEstimator
+        input_ports:
+        - object_cloud_W
+        - X_WC (optional)
+        output_ports:
+        - x
+        - X_WO
+        - scale
+        - completed_cloud_W
+        - observed_cloud_W
+        - energy
+        - confidence
+        - estimate
+
     Input ports:
         object_cloud_W: ``PointCloud`` (xyz, metres, world frame W), the segmented object.
-        camera_pose: ``RigidTransform`` X_WC of the camera (single view: its
+        X_WC: ``RigidTransform``, pose of the camera C in W (single view: its
             position turns on the visibility-aware fit); leave it
             unconnected for a full (multi-view) cloud.
     Output ports:
@@ -159,7 +175,7 @@ class LatentShapeEstimator(LeafSystem):
         self._yaws = yaw_candidates
         self._kwargs = dict(inference_kwargs)
         self._cloud_in = self.DeclareAbstractInputPort("object_cloud_W", AbstractValue.Make(PointCloud()))
-        self._camera_in = self.DeclareAbstractInputPort("camera_pose", AbstractValue.Make(RigidTransform()))
+        self._camera_in = self.DeclareAbstractInputPort("X_WC", AbstractValue.Make(RigidTransform()))
         self._state = self.DeclareAbstractState(AbstractValue.Make(failed_estimate(space.q, "not yet estimated")))
         self.DeclareInitializationUnrestrictedUpdateEvent(self._update)
         state_only = {self.abstract_state_ticket(self._state)}

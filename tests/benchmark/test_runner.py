@@ -19,7 +19,7 @@ from catgrasp_drake.benchmark.runner import (
 )
 from catgrasp_drake.errors import InputError
 from catgrasp_drake.station.scenario import load_scenario
-from catgrasp_drake.systems.object_cloud import _mask_depth
+from catgrasp_drake.perception.object_cloud import _mask_depth
 
 
 def _azimuth_elevation(camera):

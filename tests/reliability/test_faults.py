@@ -115,7 +115,7 @@ def object_trial(spec: dict) -> dict:
     in ``spec["model_dir"]``."""
     from catgrasp_drake.station.handwritten import load_handwritten_motion
     from catgrasp_drake.station.scenario import load_scenario, with_instance
-    from catgrasp_drake.station.trial import run_grasp_trial
+    from catgrasp_drake.trial import run_grasp_trial
 
     scenario = with_instance(load_scenario("drill_default"), spec["instance"], model_dir=spec["model_dir"])
     return run_grasp_trial(scenario, load_handwritten_motion("drill", spec["instance"])).to_dict()

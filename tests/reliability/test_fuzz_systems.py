@@ -15,7 +15,7 @@ from pydrake.systems.sensors import CameraInfo, ImageDepth32F, ImageLabel16I
 
 from catgrasp_drake.grasping.motion import GraspMotion
 from catgrasp_drake.systems.grasp_regressor import GraspRegressor, predict_motion_W
-from catgrasp_drake.systems.object_cloud import CloudCropVoxel, LabelDepthMask, ObjectCloudSystem
+from catgrasp_drake.perception.object_cloud import CloudCropVoxel, LabelDepthMask, ObjectCloudSystem
 from catgrasp_drake.systems.shape_estimator import LatentShapeEstimator, ShapeEstimate, estimate_on_table
 
 from .harness import attempt, check_message, finite_array, rigid_poses
@@ -95,7 +95,7 @@ def test_latent_shape_estimator_ports(small_space, data):
     cam = data.draw(st.sampled_from([("none", None), ("valid", (0.55, -0.6, 0.4)), ("nan", (np.nan, 0.0, 0.0)),
                                      ("far_1km", (1000.0, 0.0, 0.0)), ("at_object", (0.55, 0.0, 0.1))]))
     xl, X = data.draw(_X_WTs)
-    label = f"object_cloud_W:{cl[0]} camera_pose:{cam[0]} X_WT:{xl}"
+    label = f"object_cloud_W:{cl[0]} X_WC:{cam[0]} X_WT:{xl}"
     built = attempt("LatentShapeEstimator", f"X_WT:{xl}", LatentShapeEstimator, small_space, X, yaw_candidates=None,
                     max_iter=10)
     if built.rejected:
@@ -106,7 +106,7 @@ def test_latent_shape_estimator_ports(small_space, data):
         ctx = est.CreateDefaultContext()
         est.GetInputPort("object_cloud_W").FixValue(ctx, _raw_cloud(cl[1]))
         if cam[1] is not None:
-            est.GetInputPort("camera_pose").FixValue(ctx, RigidTransform(RotationMatrix(), np.asarray(cam[1])))
+            est.GetInputPort("X_WC").FixValue(ctx, RigidTransform(RotationMatrix(), np.asarray(cam[1])))
         Simulator(est, ctx).Initialize()  # the initialization event makes the estimate
         out = {name: est.GetOutputPort(name).Eval(ctx) for name in ("x", "scale", "energy", "confidence")}
         out["X_WO"] = est.GetOutputPort("X_WO").Eval(ctx).GetAsMatrix4()

@@ -10,7 +10,7 @@ from catgrasp_drake.data.dataset import instance_dir, load_annotations
 from catgrasp_drake.errors import InputError
 from catgrasp_drake.station.builder import make_station
 from catgrasp_drake.station.scenario import load_scenario, scenario_from_dict, with_instance
-from catgrasp_drake.station.trial import judge_spec, trial_diagram
+from catgrasp_drake.trial import judge_spec, trial_diagram
 
 
 def test_station_loads_an_object_from_model_dir(tmp_path):

@@ -16,7 +16,7 @@ pytest.importorskip("pydrake")
 
 from catgrasp_drake.station.handwritten import load_handwritten_motion  # noqa: E402
 from catgrasp_drake.station.scenario import load_scenario  # noqa: E402
-from catgrasp_drake.station.trial import run_grasp_trial  # noqa: E402
+from catgrasp_drake.trial import run_grasp_trial  # noqa: E402
 
 
 def _trial(name):
@@ -77,7 +77,7 @@ def test_handwritten_drill_grasp_on_drill_02_survives_the_shake_and_presses_the_
     import numpy as np
 
     from catgrasp_drake.station.scenario import with_instance
-    from catgrasp_drake.station.trial import judge_spec, plan_for, simulate_and_judge, trial_diagram
+    from catgrasp_drake.trial import judge_spec, plan_for, simulate_and_judge, trial_diagram
 
     scenario = with_instance(load_scenario("drill_default"), "drill_02")
     motion = load_handwritten_motion("drill", "drill_02")

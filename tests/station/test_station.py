@@ -12,8 +12,8 @@ from catgrasp_drake.data.open3d_import import import_open3d  # noqa: E402
 from catgrasp_drake.station.builder import make_station  # noqa: E402
 from catgrasp_drake.station.handwritten import motion_from_spec  # noqa: E402
 from catgrasp_drake.station.scenario import load_scenario, load_scenarios  # noqa: E402
-from catgrasp_drake.station.trial import run_grasp_trial  # noqa: E402
-from catgrasp_drake.systems.object_cloud import (  # noqa: E402
+from catgrasp_drake.trial import run_grasp_trial  # noqa: E402
+from catgrasp_drake.perception.object_cloud import (  # noqa: E402
     _crop_and_voxelize,
     _mask_depth,
     _voxel_downsample,

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from catgrasp_drake.station.handwritten import load_handwritten_motion
 from catgrasp_drake.station.scenario import load_scenario
-from catgrasp_drake.station.trial import judge_spec, plan_for, simulate_and_judge, trial_diagram
+from catgrasp_drake.trial import judge_spec, plan_for, simulate_and_judge, trial_diagram
 
 
 def test_wall_clock_limit_gives_a_timeout_verdict():

@@ -1,4 +1,4 @@
-"""MotionTrajectoryGenerator through its ports: the plan is the planner's, computed once, refused when unsure."""
+"""MotionPlanner through its ports: the plan is the planner's, computed once, refused when unsure."""
 
 from __future__ import annotations
 
@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 
 from catgrasp_drake.robot.models import ARM_JOINTS
-from catgrasp_drake.station.builder import make_planning_model
+from catgrasp_drake.planning.model import make_planning_model
 from catgrasp_drake.station.handwritten import load_handwritten_motion
 from catgrasp_drake.station.scenario import load_scenario
-from catgrasp_drake.systems.trajectory_generator import MotionTrajectoryGenerator
+from catgrasp_drake.systems.grasp_execution import MotionPlanner
 
 
 @pytest.fixture(scope="module")
@@ -17,7 +17,7 @@ def setup():
     scenario = load_scenario("drill_default")
     planning = make_planning_model(scenario)
     motion_W = load_handwritten_motion("drill", "drill_00").in_world(scenario.X_WO())
-    gen = MotionTrajectoryGenerator(planning.plant, planning.arm, planning.hand, planning, min_confidence=0.3)
+    gen = MotionPlanner(planning.plant, planning.arm, planning.hand, planning, min_confidence=0.3)
     return planning, motion_W, gen
 
 

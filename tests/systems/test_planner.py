@@ -16,11 +16,12 @@ from scipy.spatial.transform import Rotation
 
 from catgrasp_drake.grasping.motion import GraspMotion
 from catgrasp_drake.grasping.sampling import perturb_poses
-from catgrasp_drake.robot.models import ARM_JOINTS
-from catgrasp_drake.station.builder import hand_joint_angles, make_planning_model
+from catgrasp_drake.planning.model import make_planning_model
+from catgrasp_drake.planning.records import PHASES, PlanParams
+from catgrasp_drake.planning.planner import shake_amplitude
+from catgrasp_drake.robot.models import ARM_JOINTS, hand_joint_angles
 from catgrasp_drake.station.handwritten import load_handwritten_motion
 from catgrasp_drake.station.scenario import load_scenario
-from catgrasp_drake.systems.trajectory_generator import PlanParams
 
 
 @pytest.fixture(scope="module")
@@ -150,7 +151,6 @@ def test_the_shake_moves_the_hand_base_vertically_with_its_orientation_fixed(dri
     kinematics on the plan's knots and on the executed cubic); no turning, no sideways motion."""
     from catgrasp_drake.robot.models import HAND_ACTUATED_JOINTS
     from catgrasp_drake.station.judge import rotation_deg
-    from catgrasp_drake.systems.trajectory_generator import PHASES, shake_amplitude
 
     planning, motion_W = drill
     params = PlanParams()

@@ -11,7 +11,7 @@ from catgrasp_drake.demo import default_model_path
 from catgrasp_drake.errors import InputError
 from catgrasp_drake.prediction import METHODS, predict_motion
 from catgrasp_drake.station.scenario import load_scenario, with_instance
-from catgrasp_drake.systems.object_cloud import cloud_from_points
+from catgrasp_drake.perception.object_cloud import cloud_from_points
 from catgrasp_drake.systems.predictors import GraspPredictor
 from catgrasp_drake.transfer import make_transfer_diagram
 
@@ -89,7 +89,7 @@ def test_every_method_builds_the_transfer_diagram_with_its_own_estimator(drill):
         assert td.regressor.method == method
         ctx = td.diagram.CreateDefaultContext()
         est_ctx = td.estimator.GetMyContextFromRoot(ctx)
-        visibility = td.estimator.GetInputPort("camera_pose").HasValue(est_ctx)
+        visibility = td.estimator.GetInputPort("X_WC").HasValue(est_ctx)
         assert visibility == (method != "paper")  # the paper's fit has no visibility model
         rigid = not np.any(td.estimator.space.components)
         assert rigid == (method in ("rigid", "cpd"))

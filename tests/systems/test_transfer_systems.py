@@ -16,9 +16,9 @@ from catgrasp_drake.core.visibility import camera_on_sphere_position, hidden_poi
 from catgrasp_drake.grasping.descriptor import descriptor_vector
 from catgrasp_drake.grasping.motion import GraspMotion
 from catgrasp_drake.systems.grasp_regressor import GraspRegressor, predict_motion_W
-from catgrasp_drake.systems.object_cloud import cloud_from_points, points_from_cloud
+from catgrasp_drake.perception.object_cloud import cloud_from_points, points_from_cloud
 from catgrasp_drake.systems.shape_estimator import LatentShapeEstimator, estimate_on_table
-from catgrasp_drake.systems.trajectory_generator import refusal_status
+from catgrasp_drake.systems.grasp_execution import refusal_status
 
 from ..core.test_synthetic_shapes import family
 
@@ -64,7 +64,7 @@ def _estimator_context(est, points_W, cam_W=None):
     ctx = est.CreateDefaultContext()
     est.GetInputPort("object_cloud_W").FixValue(ctx, cloud_from_points(points_W))
     if cam_W is not None:
-        est.GetInputPort("camera_pose").FixValue(ctx, RigidTransform(cam_W))
+        est.GetInputPort("X_WC").FixValue(ctx, RigidTransform(cam_W))
     return ctx
 
 

@@ -2,12 +2,12 @@
 
 ``run_grasp_trial(scenario, motion_O)`` places the object with the
 scenario's pose, expresses the motion (object frame) in the world, plans it
-(:func:`catgrasp_drake.systems.trajectory_generator.plan_grasp`), simulates
+(:func:`catgrasp_drake.planning.planner.plan_grasp`), simulates
 it and judges it (:mod:`catgrasp_drake.station.judge`). It returns a frozen
 :class:`TrialResult` and never raises for a failed grasp: unreachable poses,
 collisions and simulation errors end up in ``failure_reason``/``detail``.
 
-The trial diagram (station + trajectory generator) is built once per
+The trial diagram (station + :class:`~catgrasp_drake.systems.grasp_execution.PlanPlayback`) is built once per
 scenario and process and reused (the plan is a context parameter), so the
 object and robot files are parsed once; with ``meshcat`` a fresh diagram is
 built (the visualizer belongs to it). Every trial starts from a fresh
@@ -29,16 +29,13 @@ from pydrake.systems.framework import DiagramBuilder, EventStatus
 from catgrasp_drake.core.fileio import atomic_write_text
 from catgrasp_drake.errors import InputError
 from catgrasp_drake.grasping.motion import GraspMotion
+from catgrasp_drake.planning.model import PlanningModel
+from catgrasp_drake.planning.records import GraspPlan, PlanParams, hold_plan
+from catgrasp_drake.robot.models import HAND_BASE_LINK, INDEX_DISTAL_LINK, load_hand_postures
 from catgrasp_drake.station.builder import StationHandles, add_station, posture_category
 from catgrasp_drake.station.judge import ContactRecord, JudgeSpec, Snapshot, Verdict, judge
 from catgrasp_drake.station.scenario import Scenario
-from catgrasp_drake.systems.trajectory_generator import (
-    GraspPlan,
-    GraspTrajectoryGenerator,
-    PlanParams,
-    hold_plan,
-    plan_grasp,
-)
+from catgrasp_drake.systems.grasp_execution import PlanPlayback
 
 #: Hydroelastic patches contribute at most this many points (centroid + face centroids).
 MAX_POINTS_PER_PATCH = 64
@@ -130,22 +127,20 @@ def contacts_from_results(plant, inspector, results) -> tuple[ContactRecord, ...
 # ----------------------------------------------------------------------------- trial diagram
 @dataclass
 class TrialDiagram:
-    """A built station + trajectory generator, reusable across trials of one scenario."""
+    """A built station + plan playback, reusable across trials of one scenario."""
 
     diagram: object
     station: StationHandles
-    generator: GraspTrajectoryGenerator
+    generator: PlanPlayback
     meshcat: Meshcat | None = None
 
 
 def build_trial_diagram(scenario: Scenario, meshcat: Meshcat | None = None) -> TrialDiagram:
-    """Station + ``GraspTrajectoryGenerator`` (holding the start pose until a plan is set)."""
-    from catgrasp_drake.robot.models import load_hand_postures
-
+    """Station + ``PlanPlayback`` (holding the start pose until a plan is set)."""
     builder = DiagramBuilder()
     h = add_station(builder, scenario, meshcat)
     q_open = load_hand_postures(posture_category(scenario))["open"]
-    generator = builder.AddNamedSystem("grasp_trajectory", GraspTrajectoryGenerator(
+    generator = builder.AddNamedSystem("grasp_trajectory", PlanPlayback(
         h.plant, h.arm, h.hand, hold_plan(np.asarray(scenario.arm_q_home), q_open, "no plan")))
     builder.Connect(generator.GetOutputPort("arm_desired_state"), h.plant.get_desired_state_input_port(h.arm))
     builder.Connect(generator.GetOutputPort("hand_desired_state"), h.plant.get_desired_state_input_port(h.hand))
@@ -175,8 +170,6 @@ def trial_diagram(scenario: Scenario, meshcat: Meshcat | None = None) -> TrialDi
 
 def judge_spec(station: StationHandles, lift_height: float) -> JudgeSpec:
     """The judge's view of ``station``: model names, the object's annotated regions, the lift height (m)."""
-    from catgrasp_drake.robot.models import INDEX_DISTAL_LINK
-
     plant = station.plant
     scenario = station.scenario
     regions = scenario.object.annotations().get("regions", {})
@@ -193,22 +186,13 @@ def judge_spec(station: StationHandles, lift_height: float) -> JudgeSpec:
 
 
 def plan_for(td: TrialDiagram, motion_W: GraspMotion, params: PlanParams = PlanParams()) -> GraspPlan:
-    """Plan ``motion_W`` (world frame) on a scratch context of the trial diagram."""
-    h = td.station
-    ctx = td.diagram.CreateDefaultContext()
-    plant_ctx = h.plant.GetMyMutableContextFromRoot(ctx)
-    sg_ctx = h.scene_graph.GetMyMutableContextFromRoot(ctx)
-    q_arm_start = np.asarray(h.scenario.arm_q_home, float)
-    return plan_grasp(h.plant, plant_ctx, h.scene_graph, sg_ctx, arm=h.arm, hand=h.hand,
-                      object_instance=h.object_instance, table=h.table, motion_W=motion_W,
-                      q_arm_start=q_arm_start, params=params)
+    """Plan ``motion_W`` (world frame) on a scratch context of the trial diagram (true object as the obstacle)."""
+    return PlanningModel.of_station(td.diagram, td.station).plan(motion_W, params)
 
 
 # ----------------------------------------------------------------------------- the trial
 def station_snapshot(h: StationHandles, context) -> Snapshot:
     """The object's pose, the hand base pose and all contacts in the root ``context`` of a diagram holding ``h``."""
-    from catgrasp_drake.robot.models import HAND_BASE_LINK
-
     plant_ctx = h.plant.GetMyContextFromRoot(context)
     X_WO = h.plant.EvalBodyPoseInWorld(plant_ctx, h.object_body).GetAsMatrix4()
     X_WH = h.plant.EvalBodyPoseInWorld(plant_ctx, h.plant.GetBodyByName(HAND_BASE_LINK, h.hand)).GetAsMatrix4()
@@ -222,7 +206,8 @@ def _finite_or_none(value: float, digits: int = 6) -> float | None:
     return round(float(value), digits) if np.isfinite(value) else None
 
 
-def _as_tuple(X: np.ndarray) -> tuple:
+def pose_tuple(X: np.ndarray) -> tuple:
+    """A pose (4x4) as nested tuples rounded to 1e-9 (comparable, JSON-able records)."""
     return tuple(tuple(round(float(v), 9) for v in row) for row in np.asarray(X))
 
 
@@ -257,7 +242,7 @@ def run_grasp_trial(scenario: Scenario, motion_O: GraspMotion, *, meshcat: Meshc
             scenario=scenario.name, category=scenario.object.category, instance=scenario.object.instance,
             grasp_success=verdict.grasp_success, functional_success=verdict.functional_success,
             failure_reason=verdict.failure_reason, detail=verdict.detail, plan_status=plan.status,
-            timeline=plan.timeline.as_dict(), X_WO_initial=_as_tuple(X_WO0), X_WO_final=_as_tuple(X_final),
+            timeline=plan.timeline.as_dict(), X_WO_initial=pose_tuple(X_WO0), X_WO_final=pose_tuple(X_final),
             object_rise_m=round(verdict.object_rise_m, 9), object_tilt_deg=round(verdict.tilt_deg, 6),
             contacts_end=pairs, hand_links_on_object=hand_links, sim_time_s=sim_time,
             wall_time_s=time.perf_counter() - wall0, plan_time_s=plan.solve_time_s,
@@ -266,8 +251,7 @@ def run_grasp_trial(scenario: Scenario, motion_O: GraspMotion, *, meshcat: Meshc
             in_hand_turn_deg=_finite_or_none(verdict.in_hand_turn_deg))
 
     if not plan.ok:
-        reason = "collision_before_closing" if plan.failure_kind == "collision" else "unreachable"
-        return result(Verdict(False, False, reason, plan.status), X_WO0, None, 0.0)
+        return result(Verdict(False, False, plan.failure_reason, plan.status), X_WO0, None, 0.0)
 
     context = td.diagram.CreateDefaultContext()
     td.generator.set_plan(td.generator.GetMyMutableContextFromRoot(context), plan)

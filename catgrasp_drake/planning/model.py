@@ -1,0 +1,93 @@
+"""The robot's planning model: arm, hand, table and the object as perceived, in a diagram of their own.
+
+:func:`make_planning_model` builds it from a scenario (no cameras; the object
+as the convex hull of perceived points, or absent);
+:meth:`PlanningModel.of_station` views a built station as one (the trial
+plans on the station's own plant, true object included). Either way
+:meth:`PlanningModel.plan` runs :func:`~catgrasp_drake.planning.planner.plan_grasp`
+on a fresh scratch context.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from pydrake.geometry import AddContactMaterial, Convex, ProximityProperties
+from pydrake.math import RigidTransform
+from pydrake.multibody.plant import AddMultibodyPlant, CoulombFriction, MultibodyPlant
+from pydrake.multibody.tree import ModelInstanceIndex, SpatialInertia, UnitInertia
+from pydrake.systems.framework import DiagramBuilder
+
+from catgrasp_drake.grasping.motion import GraspMotion
+from catgrasp_drake.planning.planner import plan_grasp
+from catgrasp_drake.planning.records import GraspPlan, PlanParams
+from catgrasp_drake.robot.models import add_arm_and_hand, load_hand_postures, make_parser, set_hand_default_posture
+from catgrasp_drake.station.builder import StationHandles, add_table, plant_config, posture_category
+from catgrasp_drake.station.scenario import Scenario
+
+
+@dataclass
+class PlanningModel:
+    """The robot's own model of the world for planning: arm, hand, table and the object as perceived.
+
+    The robot knows the table and sees the object only through its cloud, so
+    the object is the convex hull of the completed shape (``obstacle``), or
+    absent. The way to the pregrasp keeps clear of it; the reach may touch it.
+    """
+
+    diagram: object
+    plant: MultibodyPlant
+    scene_graph: object
+    arm: ModelInstanceIndex
+    hand: ModelInstanceIndex
+    table: ModelInstanceIndex
+    q_arm_start: np.ndarray
+    obstacle: ModelInstanceIndex | None = None
+
+    @classmethod
+    def of_station(cls, diagram, station: StationHandles) -> "PlanningModel":
+        """The built ``diagram`` holding ``station`` as a planning model; its obstacle is the station's (true) object."""
+        return cls(diagram, station.plant, station.scene_graph, station.arm, station.hand, station.table,
+                   np.asarray(station.scenario.arm_q_home, float), station.object_instance)
+
+    def plan(self, motion_W: GraspMotion, params: PlanParams = PlanParams()) -> GraspPlan:
+        """:func:`~catgrasp_drake.planning.planner.plan_grasp` of ``motion_W`` on a fresh scratch context."""
+        ctx = self.diagram.CreateDefaultContext()
+        return plan_grasp(self.plant, self.plant.GetMyMutableContextFromRoot(ctx), self.scene_graph,
+                          self.scene_graph.GetMyMutableContextFromRoot(ctx), arm=self.arm, hand=self.hand,
+                          object_instance=self.obstacle, table=self.table, motion_W=motion_W,
+                          q_arm_start=self.q_arm_start, params=params)
+
+
+def make_planning_model(scenario: Scenario, obstacle_W=None) -> PlanningModel:
+    """The robot's planning model of ``scenario``: table + arm + hand, no cameras, and the object as perceived.
+
+    ``obstacle_W`` (N, 3) world points of the object as the robot knows it
+    (e.g. the estimator's completed shape) become one welded body
+    ``perceived_object`` with their convex hull as collision geometry; the
+    planner keeps the arm clear of it on the way to the pregrasp (the reach
+    itself is allowed to touch it). None (or fewer than 4 points): no object
+    in the model. The arm starts at ``scenario.arm_q_home``, the hand open.
+    """
+    builder = DiagramBuilder()
+    plant, scene_graph = AddMultibodyPlant(plant_config(scenario), builder)
+    parser = make_parser(plant)
+    table = add_table(plant, scenario)
+    arm_hand = add_arm_and_hand(plant, parser, X_W_ArmBase=RigidTransform(scenario.arm_base.matrix()))
+    obstacle = None
+    if obstacle_W is not None and len(obstacle_W) >= 4:
+        obstacle = plant.AddModelInstance("perceived_object")
+        body = plant.AddRigidBody("body", obstacle, SpatialInertia(1.0, np.zeros(3), UnitInertia.SolidSphere(0.05)))
+        plant.WeldFrames(plant.world_frame(), body.body_frame(), RigidTransform())
+        props = ProximityProperties()
+        AddContactMaterial(dissipation=5.0, point_stiffness=1e5, friction=CoulombFriction(0.5, 0.5),
+                           properties=props)
+        plant.RegisterCollisionGeometry(body, RigidTransform(), Convex(np.asarray(obstacle_W, float).T, "hull"),
+                                        "hull", props)
+    plant.Finalize()
+    set_hand_default_posture(plant, arm_hand.hand, load_hand_postures(posture_category(scenario))["open"])
+    diagram = builder.Build()
+    diagram.set_name("planning_model")
+    return PlanningModel(diagram, plant, scene_graph, arm_hand.arm, arm_hand.hand, table,
+                         np.asarray(scenario.arm_q_home, float), obstacle)
