@@ -39,14 +39,6 @@ FILE_KIND = "catgrasp.category_model"
 FILE_VERSION = 1
 
 
-def similarity_matrix(R, t, s: float = 1.0) -> np.ndarray:
-    """4x4 matrix of p -> s R p + t."""
-    S = np.eye(4)
-    S[:3, :3] = float(s) * np.asarray(R, float)
-    S[:3, 3] = np.asarray(t, float)
-    return S
-
-
 def check_similarity(R, t, s):
     """``(R, t, s)`` of a similarity checked: a proper 3x3 rotation, a finite translation (m), a scale > 0."""
     R = real_array(R, "R", "3x3 rotation matrix")

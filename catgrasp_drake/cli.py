@@ -90,12 +90,15 @@ def _cmd_generate_data(args) -> int:
 
 
 def _cmd_contact_sheet(args) -> int:
-    from catgrasp_drake.viz.sheets import dataset_contact_sheet
+    from catgrasp_drake.viz.sheets import dataset_contact_sheet, ycb_contact_sheet
 
     for category in args.categories or ():
         _check_category(category)
     t0 = time.perf_counter()
-    dataset_contact_sheet(args.out, categories=args.categories)
+    if args.ycb is not None:
+        ycb_contact_sheet(args.ycb or None, args.out)
+    else:
+        dataset_contact_sheet(args.out, categories=args.categories)
     print(f"wrote {args.out} in {time.perf_counter() - t0:.1f} s")
     return 0
 
@@ -327,6 +330,9 @@ def build_parser() -> argparse.ArgumentParser:
     c = sub.add_parser("contact-sheet", help="render every instance into one PNG")
     c.add_argument("--out", default="docs/objects.png")
     c.add_argument("--categories", nargs="+", default=None)
+    c.add_argument("--ycb", nargs="?", const="", default=None, metavar="ROOT",
+                   help="instead: the aligned YCB objects next to their reference instances (ROOT: where "
+                        "`python -m catgrasp_drake.data.ycb --out ROOT` wrote them; default out/ycb)")
     c.set_defaults(func=_cmd_contact_sheet)
 
     k = sub.add_parser("clouds", help="full (ray-cast + voxel grid) clouds of a category's instances")

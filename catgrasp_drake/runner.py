@@ -41,9 +41,6 @@ from typing import Any, Callable, Iterable, Mapping, Sequence
 from catgrasp_drake.core.fileio import atomic_write_text
 from catgrasp_drake.errors import InputError, one_line
 
-_PACKAGE_ROOT = Path(__file__).resolve().parent
-
-
 def canonical_json(obj: Any) -> str:
     """Deterministic JSON text (sorted keys, no spaces) used for hashing."""
     return json.dumps(obj, sort_keys=True, separators=(",", ":"), allow_nan=False)

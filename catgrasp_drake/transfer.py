@@ -34,6 +34,7 @@ from pydrake.systems.framework import DiagramBuilder, EventStatus, LeafSystem
 from pydrake.systems.primitives import ConstantValueSource
 
 from catgrasp_drake.category_model import CategoryModel
+from catgrasp_drake.core.visibility import camera_on_sphere_position
 from catgrasp_drake.data.dataset import instance_mesh_path
 from catgrasp_drake.errors import InputError
 from catgrasp_drake.perception.object_cloud import cloud_from_points, points_from_cloud
@@ -65,7 +66,7 @@ def ring_cameras(scenario: Scenario, n: int = FULL_VIEW_CAMERAS, distance: float
     cams = []
     for k in range(n):
         az = 2 * np.pi * k / n + np.pi / 4
-        eye = target + distance * np.array([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)])
+        eye = camera_on_sphere_position(target, distance, az, el)
         cams.append(CameraSpec(name=f"ring{k}", look_at_eye=tuple(eye), look_at_target=tuple(target), width=base.width,
                                height=base.height, fov_y_deg=base.fov_y_deg, depth_range=base.depth_range))
     return tuple(cams)

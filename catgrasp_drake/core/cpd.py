@@ -56,7 +56,6 @@ Speed-ups (all exact or with a stated, measured error):
 from __future__ import annotations
 
 import math
-import os
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from typing import Callable
@@ -64,6 +63,7 @@ from typing import Callable
 import numpy as np
 import scipy.linalg
 
+from catgrasp_drake.core.threads import blas_single_threaded, n_threads
 from catgrasp_drake.core.validation import as_points, count, non_negative, outlier_weight, positive
 from catgrasp_drake.errors import InputError
 
@@ -150,7 +150,7 @@ def gaussian_kernel(A, B, beta) -> np.ndarray:
     if A.shape[1] != B.shape[1]:
         raise InputError(f"gaussian_kernel: expected (K, D) and (L, D) arrays, got {A.shape} and {B.shape}")
     beta = kernel_width(beta)
-    d2 = _sqdist(A, B)
+    d2 = sqdist(A, B)
     d2 *= -0.5 / (beta * beta)
     np.maximum(d2, -700.0, out=d2)
     np.exp(d2, out=d2)
@@ -181,7 +181,7 @@ def _kernel_points(A, name: str) -> np.ndarray:
     return A
 
 
-def _sqdist(A: np.ndarray, B: np.ndarray) -> np.ndarray:
+def sqdist(A: np.ndarray, B: np.ndarray) -> np.ndarray:
     """Squared distances (K, L), exact to rounding (centred, clipped at 0)."""
     c = 0.5 * (A.mean(axis=0) + B.mean(axis=0)) if len(A) and len(B) else 0.0
     A = A - c
@@ -214,88 +214,6 @@ def initial_sigma2(source: np.ndarray, target: np.ndarray) -> float:
 #: summation order, hence every result bit, does not depend on the machine (with one block per core,
 #: results differed by ~1e-10 between 1, 2, 3 and 4 threads).
 THREADED_BLOCKS = 2
-
-
-def _n_threads() -> int:
-    return max(1, min(4, os.cpu_count() or 1))
-
-
-#: Run BLAS single-threaded inside the EM loops (see :class:`single_threaded_blas`).
-LIMIT_BLAS_THREADS = True
-
-
-class single_threaded_blas:
-    """Context manager: OpenBLAS runs single-threaded inside, restored on exit.
-
-    The EM loops call many small BLAS/LAPACK kernels between numpy ufuncs;
-    OpenBLAS's worker threads spin-wait between calls and, when the cores are
-    shared (another process running), made CPD 10-20x slower on the 2-core
-    test machine (0.3 s -> 6 s for one 500-point drill registration). The
-    parallelism that matters (the E-step's exp) is done by this module's own
-    threads. Linux + OpenBLAS only (the libraries loaded by numpy and scipy
-    are found in /proc/self/maps and driven with ctypes); a no-op elsewhere
-    or when :data:`LIMIT_BLAS_THREADS` is False. The setting is process-wide
-    while active.
-    """
-
-    _libs = None
-
-    @classmethod
-    def _find(cls):
-        if cls._libs is not None:
-            return cls._libs
-        libs = []
-        try:
-            import ctypes
-
-            with open("/proc/self/maps") as f:
-                paths = sorted({ln.split()[-1] for ln in f if "openblas" in ln.lower() and ".so" in ln})
-            for path in paths:
-                try:
-                    lib = ctypes.CDLL(path)
-                except OSError:
-                    continue
-                for get, set_ in (("scipy_openblas_get_num_threads64_", "scipy_openblas_set_num_threads64_"),
-                                  ("scipy_openblas_get_num_threads", "scipy_openblas_set_num_threads"),
-                                  ("openblas_get_num_threads64_", "openblas_set_num_threads64_"),
-                                  ("openblas_get_num_threads", "openblas_set_num_threads")):
-                    if hasattr(lib, get) and hasattr(lib, set_):
-                        g, s_ = getattr(lib, get), getattr(lib, set_)
-                        g.restype = ctypes.c_int
-                        s_.argtypes = [ctypes.c_int]
-                        libs.append((g, s_))
-                        break
-        except OSError:
-            libs = []
-        cls._libs = libs
-        return libs
-
-    def __enter__(self):
-        self._saved = []
-        if LIMIT_BLAS_THREADS:
-            for g, s_ in self._find():
-                n = int(g())
-                if n > 1:
-                    s_(1)
-                    self._saved.append((s_, n))
-        return self
-
-    def __exit__(self, *exc):
-        for s_, n in self._saved:
-            s_(n)
-        return False
-
-
-def _blas_single(fn):
-    """Decorator: run ``fn`` inside :class:`single_threaded_blas`."""
-    import functools
-
-    @functools.wraps(fn)
-    def wrapper(*args, **kwargs):
-        with single_threaded_blas():
-            return fn(*args, **kwargs)
-
-    return wrapper
 
 
 @dataclass(frozen=True)
@@ -335,7 +253,7 @@ def _estep_block(Ya, Ysc, X, Xa, sigma2, log_c, lo, hi):
     pt1 = s * inv
     if np.any(bad):
         idx = np.flatnonzero(bad)
-        e = -_sqdist(Ysc, X[lo:hi][idx]) / (2.0 * sigma2)
+        e = -sqdist(Ysc, X[lo:hi][idx]) / (2.0 * sigma2)
         m = e.max(axis=0)
         a = np.exp(np.maximum(e - m, -700.0))
         log_shifted_c = log_c - m
@@ -408,7 +326,7 @@ def estep(Y_t: np.ndarray, X: np.ndarray, sigma2: float, w: float, *, pool=None,
     return EStep(P1=P1, Pt1=Pt1, PX=PX, Np=Np, nll=nll)
 
 
-def _sigma2_update(X, T, e: EStep) -> float:
+def sigma2_update(X, T, e: EStep) -> float:
     D = X.shape[1]
     xPx = float(e.Pt1 @ (X * X).sum(1))
     tPt = float(e.P1 @ (T * T).sum(1))
@@ -545,7 +463,7 @@ def _exact_mstep(G, P1, B, lam_s2):
 
 
 
-@_blas_single
+@blas_single_threaded
 def nonrigid_cpd(
     source,
     target,
@@ -606,7 +524,7 @@ def nonrigid_cpd(
     e = None
     # threaded by problem size only (a 1-worker pool on one core): the block layout, hence the rounding
     # of the E-step sums, is the same on every machine
-    pool = ThreadPoolExecutor(_n_threads()) if M * N >= 200_000 else None
+    pool = ThreadPoolExecutor(n_threads()) if M * N >= 200_000 else None
     try:
         for it in range(1, max_iter + 1):
             e = estep(T, Xn, s2, w, pool=pool)
@@ -635,7 +553,7 @@ def nonrigid_cpd(
                 V = Q @ LZ
                 reg = float((Z * LZ).sum())
             T = Yn + V
-            s2 = max(_sigma2_update(Xn, T, e), SIGMA2_FLOOR)
+            s2 = max(sigma2_update(Xn, T, e), SIGMA2_FLOOR)
             if callback is not None:
                 callback(CPDIteration(it, center + scale * T, s2 * scale**2, f))
             if s2 <= SIGMA2_FLOOR:
@@ -689,7 +607,7 @@ def weighted_procrustes(PX, P1, Pt1, Np, X, Y, *, scale: bool = True):
     return R, t, s, tr_AR
 
 
-@_blas_single
+@blas_single_threaded
 def rigid_cpd(
     source,
     target,
@@ -741,7 +659,7 @@ def rigid_cpd(
             break
         R, t, s, tr_AR = weighted_procrustes(e.PX, e.P1, e.Pt1, e.Np, Xn, Yn, scale=scale)
         T = s * Yn @ R.T + t
-        s2 = max(_sigma2_update(Xn, T, e), SIGMA2_FLOOR)
+        s2 = max(sigma2_update(Xn, T, e), SIGMA2_FLOOR)
         if callback is not None:
             callback(CPDIteration(it, center + sc * T, s2 * sc**2, f))
         if s2 <= SIGMA2_FLOOR:

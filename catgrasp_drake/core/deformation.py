@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from catgrasp_drake.core.cpd import _sqdist, gaussian_kernel, kernel_width
+from catgrasp_drake.core.cpd import gaussian_kernel, kernel_width, sqdist
 from catgrasp_drake.core.rotations import orthonormalize
 from catgrasp_drake.core.validation import MAX_COORDINATE_M, as_points, count, non_negative, real_array
 from catgrasp_drake.errors import InputError
@@ -117,7 +117,7 @@ def inverse_deform_points(
     p = np.empty_like(O)
     for lo in range(0, len(O), _CHUNK):
         o = O[lo:lo + _CHUNK]
-        d2 = _sqdist(o, D) / (2.0 * beta**2)
+        d2 = sqdist(o, D) / (2.0 * beta**2)
         a = np.exp(-(d2 - d2.min(axis=1, keepdims=True)))
         p[lo:lo + _CHUNK] = o - (a @ V) / a.sum(axis=1, keepdims=True)
     res = deform_points(C, W, beta, p) - O

@@ -58,18 +58,17 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from catgrasp_drake.core.cpd import (
-    _n_threads,
-    _sigma2_update,
     estep,
     initial_sigma2,
     kernel_width,
     nonrigid_cpd,
-    single_threaded_blas,
+    sigma2_update,
     weighted_procrustes,
 )
 from catgrasp_drake.core.deformation import deform_points, warp_poses
 from catgrasp_drake.core.rotations import orthonormalize, rotz
 from catgrasp_drake.core.shape_space import ShapeSpace
+from catgrasp_drake.core.threads import n_threads, single_threaded_blas
 from catgrasp_drake.core.validation import (
     as_points,
     count,
@@ -259,7 +258,7 @@ class _Problem:
             st.R, st.t, st.s = R, t, float(s)
             Y = self.model(st.x)
             T = st.s * Y @ st.R.T + st.t
-            st.sigma2 = max(_sigma2_update(O, T[idx], e), SIGMA2_MIN_M2)
+            st.sigma2 = max(sigma2_update(O, T[idx], e), SIGMA2_MIN_M2)
         st.visible = vis
         return st
 
@@ -440,7 +439,7 @@ def infer_latent_pose(
         best.visible = None
         O_fit = _subsample(O, max_points)
         # a pool even on one core: whether the E-step is split into blocks must not depend on the machine
-        pool = ThreadPoolExecutor(_n_threads())
+        pool = ThreadPoolExecutor(n_threads())
         try:
             st = prob.run(best, O_fit, max_iter, tol, vis_every=visibility_every, pool=pool)
         finally:

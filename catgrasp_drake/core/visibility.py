@@ -9,6 +9,10 @@ Open3D's examples use ``100 x`` the diameter). The default 100 suits the
 ~500-point real drills seen from 0.6 m (see tests).
 
 Uses scipy.spatial.ConvexHull (Qhull; deterministic).
+
+Camera placement lives here too (the one home of both): :func:`camera_on_sphere_position`
+(a camera at a distance, azimuth and elevation about a point) and :func:`look_at_matrix`
+(the pose X_WC of a Drake camera at an eye looking at a target).
 """
 
 from __future__ import annotations
@@ -72,3 +76,22 @@ def camera_on_sphere_position(center, distance: float, azimuth: float, elevation
     d = positive(distance, "distance")
     azimuth, elevation = real_number(azimuth, "azimuth"), real_number(elevation, "elevation")
     return c + d * np.array([np.cos(elevation) * np.cos(azimuth), np.cos(elevation) * np.sin(azimuth), np.sin(elevation)])
+
+
+def look_at_matrix(eye, target, up=(0.0, 0.0, 1.0)) -> np.ndarray:
+    """X_WC (4x4) of a Drake camera (z forward, x right, y down) at ``eye`` looking at ``target``."""
+    eye, target, up = (np.asarray(v, float) for v in (eye, target, up))
+    z = target - eye
+    n = np.linalg.norm(z)
+    if n < 1e-9:
+        raise InputError("camera look_at: eye and target coincide")
+    z /= n
+    x = np.cross(z, up)
+    if np.linalg.norm(x) < 1e-9:
+        x = np.cross(z, np.array([0.0, 1.0, 0.0]))
+    x /= np.linalg.norm(x)
+    y = np.cross(z, x)
+    X = np.eye(4)
+    X[:3, :3] = np.column_stack([x, y, z])
+    X[:3, 3] = eye
+    return X

@@ -51,12 +51,6 @@ def _u(rng: np.random.Generator, lo: float, hi: float) -> float:
     return round(float(rng.uniform(lo, hi)), 5)
 
 
-def _ground(solid: Manifold) -> Manifold:
-    """Shift so the lowest point is exactly on z = 0."""
-    (_, _, zmin, _, _, _) = solid.bounding_box()
-    return solid.translate((0.0, 0.0, -zmin))
-
-
 # ----------------------------------------------------------------------------- drill
 def drill_params(rng: np.random.Generator) -> dict[str, float]:
     p = {

@@ -39,7 +39,7 @@ PACKAGE_NAME = "catgrasp_drake_models"
 #: Friction of object surfaces (Coulomb, static and dynamic).
 OBJECT_FRICTION = (0.9, 0.8)
 
-_COLORS = {"drill": (0.85, 0.45, 0.1), "spray_bottle": (0.2, 0.5, 0.85), "mug": (0.85, 0.85, 0.8)}
+CATEGORY_COLORS = {"drill": (0.85, 0.45, 0.1), "spray_bottle": (0.2, 0.5, 0.85), "mug": (0.85, 0.85, 0.8)}
 
 
 def models_dir() -> Path:
@@ -158,7 +158,7 @@ def _sdf_text(name: str, mesh_file: str, mass: float, com, inertia, color) -> st
 """
 
 
-def _obj_bytes(mesh: trimesh.Trimesh) -> bytes:
+def obj_bytes(mesh: trimesh.Trimesh) -> bytes:
     """OBJ text with vertices, vertex normals and faces (Drake's renderer needs normals)."""
     v = mesh.vertices
     n = mesh.vertex_normals
@@ -191,9 +191,9 @@ def write_model_files(directory: Path, name: str, category: str, mesh: trimesh.T
     directory.mkdir(parents=True, exist_ok=True)
     com = mass_solid.center_mass
     inertia = mass_solid.moment_inertia  # about the centre of mass, body axes
-    atomic_write_bytes(directory / f"{name}.obj", _obj_bytes(mesh))
+    atomic_write_bytes(directory / f"{name}.obj", obj_bytes(mesh))
     atomic_write_text(directory / f"{name}.sdf",
-                      _sdf_text(name, f"{name}.obj", mass_kg, com, inertia, _COLORS[category]))
+                      _sdf_text(name, f"{name}.obj", mass_kg, com, inertia, CATEGORY_COLORS[category]))
     vertices = np.round(mesh.vertices, 6)  # the precision written to the OBJ
     annotations = {
         "format": ANNOTATION_FORMAT,

@@ -17,6 +17,7 @@ import numpy as np
 import trimesh
 
 from catgrasp_drake.core.validation import as_points, count, non_negative, positive, real_number, vector3
+from catgrasp_drake.core.visibility import camera_on_sphere_position
 from catgrasp_drake.data.open3d_import import import_open3d
 from catgrasp_drake.errors import InputError
 
@@ -75,13 +76,8 @@ class PinholeCamera:
 def camera_on_sphere(target, distance: float, azimuth_rad: float, elevation_rad: float, **kw) -> PinholeCamera:
     """Camera at ``distance`` from ``target``; azimuth from +x toward +y, elevation above the x-y plane."""
     target = vector3(target, "target")
-    distance = positive(distance, "distance")
     azimuth_rad, elevation_rad = real_number(azimuth_rad, "azimuth_rad"), real_number(elevation_rad, "elevation_rad")
-    eye = target + distance * np.array([
-        np.cos(elevation_rad) * np.cos(azimuth_rad),
-        np.cos(elevation_rad) * np.sin(azimuth_rad),
-        np.sin(elevation_rad),
-    ])
+    eye = camera_on_sphere_position(target, distance, azimuth_rad, elevation_rad)
     up = (0.0, 0.0, 1.0) if abs(np.cos(elevation_rad)) > 1e-6 else (1.0, 0.0, 0.0)
     return PinholeCamera(tuple(eye), tuple(target), up, **kw)
 

@@ -27,11 +27,6 @@ def rot_x(angle: float) -> np.ndarray:
     return np.array([[1, 0, 0], [0, c, -s], [0, s, c]])
 
 
-def rot_y(angle: float) -> np.ndarray:
-    c, s = np.cos(angle), np.sin(angle)
-    return np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]])
-
-
 def sphere(center, radius: float, segments: int = SMALL_SEGMENTS) -> Manifold:
     return Manifold.sphere(radius, segments).translate(tuple(map(float, center)))
 

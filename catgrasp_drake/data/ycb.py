@@ -36,7 +36,8 @@ cup axis on the z axis).
 
 Command line::
 
-    python -m catgrasp_drake.data.ycb --out out/ycb --sheet docs/ycb_aligned.png
+    python -m catgrasp_drake.data.ycb --out out/ycb
+    catgrasp contact-sheet --ycb out/ycb --out docs/ycb_aligned.png   # the alignment, pictured
 """
 
 from __future__ import annotations
@@ -52,9 +53,7 @@ import numpy as np
 import trimesh
 
 from catgrasp_drake.data.dataset import (
-    _COLORS,
     WrittenInstance,
-    _obj_bytes,
     models_dir,
     read_annotations,
     write_model_files,
@@ -326,69 +325,11 @@ def drake_mass(name: str, root: str | os.PathLike | None = None) -> float:
     return float(body.default_mass())
 
 
-# ----------------------------------------------------------------------------- contact sheet
-REFERENCE_INSTANCE = {"drill": "drill_00", "spray_bottle": "spray_bottle_00", "mug": "mug_00"}
-_SHEET_VIEWS = ((0.0, 10.0), (35.0, 20.0))  # (azimuth, elevation) in degrees; +y points right
-
-
-def _overlay_regions(img: np.ndarray, regions: dict, bounds, view, size, tmp: Path) -> np.ndarray:
-    """Blend each region box (rendered alone with the same camera) in semi-transparent red."""
-    from catgrasp_drake.viz.render import render_mesh
-
-    out = img.astype(float)
-    for k, reg in enumerate(regions.values()):
-        box = trimesh.creation.box(extents=2 * np.asarray(reg["half_extents"], float))
-        box.apply_translation(np.asarray(reg["center"], float))
-        path = tmp / f"region_{k}.obj"
-        path.write_bytes(_obj_bytes(box))
-        mask = render_mesh(path, size=size, azimuth_deg=view[0], elevation_deg=view[1], bounds=bounds).min(axis=2) < 250
-        out[mask] = 0.45 * out[mask] + 0.55 * np.array([230.0, 20.0, 20.0])
-    return out.astype(np.uint8)
-
-
-def make_sheet(root: str | os.PathLike | None, path: str | os.PathLike, *, size: tuple[int, int] = (240, 240)) -> None:
-    """Contact sheet: each aligned YCB object next to its category's reference instance.
-
-    Per row: the YCB object from the side (+x; +y points right) and from the
-    default 3/4 view, then the embedded reference instance from the same two
-    views, both at the same scale (one camera framing the union of their
-    bounding boxes); functional regions blended in red.
-    """
-    import tempfile
-
-    from catgrasp_drake.data.dataset import instance_mesh_path, load_annotations
-    from catgrasp_drake.viz.render import contact_sheet, render_mesh
-
-    images, labels = [], []
-    with tempfile.TemporaryDirectory(prefix="catgrasp_ycb_sheet_") as tmp:
-        tmp = Path(tmp)
-        for category, name in ycb_instances():
-            ann = ycb_annotations(name, root)
-            ref = REFERENCE_INSTANCE[category]
-            ref_ann = load_annotations(category, ref)
-            rows = [(ycb_mesh_path(name, root), ann, f"{name} ({_obj(name).ycb_id[4:]})"),
-                    (instance_mesh_path(category, ref), ref_ann, f"{ref} (embedded)")]
-            lo = np.minimum(ann["bbox_min"], ref_ann["bbox_min"])
-            hi = np.maximum(ann["bbox_max"], ref_ann["bbox_max"])
-            for mesh_path, a, label in rows:
-                color = tuple(c for c in _COLORS[category]) + (1.0,)
-                for view in _SHEET_VIEWS:
-                    img = render_mesh(mesh_path, color=color, size=size, azimuth_deg=view[0],
-                                      elevation_deg=view[1], bounds=(lo, hi))
-                    img = _overlay_regions(img, a.get("regions", {}), (lo, hi), view, size, tmp)
-                    tag = "" if a.get("functional", True) else ", no trigger"
-                    labels.append(f"{label}{tag}" if view == _SHEET_VIEWS[0] else f"az {view[0]:.0f} el {view[1]:.0f}")
-                    images.append(img)
-    contact_sheet(images, labels, path, columns=4,
-                  title="YCB objects aligned to the canonical frames (left) vs embedded instance (right); +y right; red: functional region")
-
-
 # ----------------------------------------------------------------------------- command line
 def main(argv: Sequence[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="python -m catgrasp_drake.data.ycb",
                                  description="Align the YCB objects to the canonical frames and write them as instances.")
     ap.add_argument("--out", default=None, help="output root (default: <repo>/out/ycb)")
-    ap.add_argument("--sheet", default=None, help="also write a contact sheet PNG here")
     args = ap.parse_args(argv)
     try:
         written = prepare_ycb(args.out)
@@ -398,9 +339,6 @@ def main(argv: Sequence[str] | None = None) -> int:
             ext = np.subtract(ann["bbox_max"], ann["bbox_min"])
             print(f"{w.category:13s} {w.name}  mass {mass:.3f} kg (Drake)  extents x/y/z "
                   f"{ext[0]:.3f} {ext[1]:.3f} {ext[2]:.3f} m  inertia from {ann['inertia_from']}  -> {w.directory}")
-        if args.sheet:
-            make_sheet(args.out, args.sheet)
-            print(f"contact sheet -> {args.sheet}")
     except InputError as e:  # includes YcbNotInstalledError
         print(f"error: {e}", file=sys.stderr)
         return 2

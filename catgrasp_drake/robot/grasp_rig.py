@@ -190,11 +190,7 @@ def simulate_cylinder_grasp(
     context = simulator.get_mutable_context()
     plant_context = plant.GetMyMutableContextFromRoot(context)
     lift.set_translation(plant_context, h)
-    for name, value in zip(models.HAND_ACTUATED_JOINTS, postures["preshape"]):
-        plant.GetJointByName(name, hand).set_angle(plant_context, float(value))
-    for follower, (leader, mult, offset) in models.hand_mimic_joints().items():
-        q_leader = plant.GetJointByName(leader, hand).get_angle(plant_context)
-        plant.GetJointByName(follower, hand).set_angle(plant_context, mult * q_leader + offset)
+    models.set_hand_angles(plant, plant_context, hand, postures["preshape"])
     plant.SetFreeBodyPose(
         plant_context, cylinder, RigidTransform([p_W_axis[0], p_W_axis[1], L / 2 + 1e-4])
     )

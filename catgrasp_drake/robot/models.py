@@ -40,12 +40,18 @@ from pydrake.multibody.plant import CoulombFriction, DiscreteContactSolver, Mult
 from pydrake.multibody.tree import JointActuatorIndex, ModelInstanceIndex, PdControllerGains
 
 from catgrasp_drake.errors import InputError, ModelFileError
-from catgrasp_drake.robot import svh_model, ur10_model
+from catgrasp_drake.robot.specs import (
+    SVH_ACTUATED_JOINTS,
+    SVH_ACTUATOR_GAINS,
+    SVH_LINK_NAMES,
+    UR10_ACTUATOR_GAINS,
+    UR10_JOINT_NAMES,
+    UR10_LINK_NAMES,
+)
 
 MODELS_DIR: Path = Path(__file__).resolve().parents[2] / "models"
 PACKAGE_NAME = "catgrasp_drake_models"
 
-HAND_URDF_URL = f"package://{PACKAGE_NAME}/svh/svh_right.urdf"
 ARM_URDF_URL = f"package://{PACKAGE_NAME}/ur10/ur10.urdf"
 HAND_URDF_PATH: Path = MODELS_DIR / "svh" / "svh_right.urdf"
 ARM_URDF_PATH: Path = MODELS_DIR / "ur10" / "ur10.urdf"
@@ -54,11 +60,11 @@ HAND_POSTURES_PATH: Path = MODELS_DIR / "svh" / "postures.yaml"
 # ----------------------------------------------------------------------------- hand
 
 #: The 9 actuated hand joints; the order of posture vectors and of the hand's actuation.
-HAND_ACTUATED_JOINTS: tuple[str, ...] = svh_model.ACTUATED_JOINTS
+HAND_ACTUATED_JOINTS: tuple[str, ...] = SVH_ACTUATED_JOINTS
 #: The 11 mimic joints (Drake coupler constraints) as {follower: (leader, multiplier, offset)}
 #: are read from the URDF: see :func:`hand_mimic_joints`.
 HAND_BASE_LINK = "svh_base_link"
-HAND_LINKS: tuple[str, ...] = tuple(svh_model.LINK_NAMES.values())
+HAND_LINKS: tuple[str, ...] = tuple(SVH_LINK_NAMES.values())
 #: Distal link of each finger.
 FINGER_DISTAL_LINKS: dict[str, str] = {
     "thumb": "svh_thumb_distal_link",
@@ -79,17 +85,16 @@ THUMB_LINKS: tuple[str, ...] = (
     "svh_thumb_distal_link",
 )
 #: (Kp [N m/rad], Kd [N m s/rad], effort limit [N m]) per actuated hand joint.
-HAND_PD_GAINS: dict[str, tuple[float, float, float]] = dict(svh_model.ACTUATOR_GAINS)
-HAND_POSTURE_CATEGORIES: tuple[str, ...] = ("drill", "spray_bottle", "mug", "cylinder")
+HAND_PD_GAINS: dict[str, tuple[float, float, float]] = dict(SVH_ACTUATOR_GAINS)
 
 # ----------------------------------------------------------------------------- arm
 
-ARM_JOINTS: tuple[str, ...] = ur10_model.JOINT_NAMES
-ARM_LINKS: tuple[str, ...] = ur10_model.LINK_NAMES
-ARM_BASE_LINK = ur10_model.LINK_NAMES[0]
+ARM_JOINTS: tuple[str, ...] = UR10_JOINT_NAMES
+ARM_LINKS: tuple[str, ...] = UR10_LINK_NAMES
+ARM_BASE_LINK = UR10_LINK_NAMES[0]
 ARM_FLANGE_FRAME = "ur10_tool0"
 #: (Kp, Kd, effort limit) per arm joint.
-ARM_PD_GAINS: dict[str, tuple[float, float, float]] = dict(ur10_model.ACTUATOR_GAINS)
+ARM_PD_GAINS: dict[str, tuple[float, float, float]] = dict(UR10_ACTUATOR_GAINS)
 #: A comfortable configuration: upper arm raised, forearm level, hand pointing down.
 ARM_HOME_POSITIONS = np.array([0.0, -math.pi / 2, math.pi / 2, -math.pi / 2, -math.pi / 2, 0.0])
 
@@ -278,11 +283,6 @@ def set_hand_default_posture(plant: MultibodyPlant, hand: ModelInstanceIndex, q_
 def hand_links() -> tuple[str, ...]:
     """Names of all hand bodies (same as ``HAND_LINKS``)."""
     return HAND_LINKS
-
-
-def hand_bodies(plant: MultibodyPlant, hand: ModelInstanceIndex) -> list:
-    """The hand's RigidBody objects in ``plant``."""
-    return [plant.GetBodyByName(name, hand) for name in HAND_LINKS]
 
 
 # ----------------------------------------------------------------------------- postures

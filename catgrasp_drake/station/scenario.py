@@ -51,6 +51,7 @@ from typing import Any
 import numpy as np
 import yaml
 
+from catgrasp_drake.core.visibility import look_at_matrix
 from catgrasp_drake.errors import InputError, ModelFileError
 
 #: The project's scenario file.
@@ -208,25 +209,6 @@ class Scenario:
 
     def replace(self, **changes) -> "Scenario":
         return dataclasses.replace(self, **changes)
-
-
-def look_at_matrix(eye, target, up=(0.0, 0.0, 1.0)) -> np.ndarray:
-    """X_WC (4x4) of a Drake camera (z forward, x right, y down) at ``eye`` looking at ``target``."""
-    eye, target, up = (np.asarray(v, float) for v in (eye, target, up))
-    z = target - eye
-    n = np.linalg.norm(z)
-    if n < 1e-9:
-        raise InputError("camera look_at: eye and target coincide")
-    z /= n
-    x = np.cross(z, up)
-    if np.linalg.norm(x) < 1e-9:
-        x = np.cross(z, np.array([0.0, 1.0, 0.0]))
-    x /= np.linalg.norm(x)
-    y = np.cross(z, x)
-    X = np.eye(4)
-    X[:3, :3] = np.column_stack([x, y, z])
-    X[:3, 3] = eye
-    return X
 
 
 # ----------------------------------------------------------------------------- parsing

@@ -26,25 +26,13 @@ from pydrake.geometry import (
     Rgba,
     SceneGraph,
 )
-from pydrake.math import RigidTransform, RotationMatrix
+from pydrake.math import RigidTransform
 from pydrake.systems.sensors import CameraInfo
 
 from catgrasp_drake.core.fileio import atomic_write_bytes
+from catgrasp_drake.core.visibility import camera_on_sphere_position, look_at_matrix
 
 _RENDERER = "catgrasp_vtk"
-
-
-def look_at(eye, target, up=(0.0, 0.0, 1.0)) -> RigidTransform:
-    """Pose X_WC of a Drake camera (z forward, x right, y down) at ``eye`` looking at ``target``."""
-    eye, target, up = (np.asarray(v, float) for v in (eye, target, up))
-    z = target - eye
-    z /= np.linalg.norm(z)
-    x = np.cross(z, up)
-    if np.linalg.norm(x) < 1e-9:
-        x = np.cross(z, np.array([0.0, 1.0, 0.0]))
-    x /= np.linalg.norm(x)
-    y = np.cross(z, x)
-    return RigidTransform(RotationMatrix(np.column_stack([x, y, z])), eye)
 
 
 def render_mesh(
@@ -73,7 +61,7 @@ def render_mesh(
     radius = 0.5 * np.linalg.norm(hi - lo)
     dist = 1.15 * radius / np.sin(np.radians(fov_y_deg) / 2)
     az, el = np.radians(azimuth_deg), np.radians(elevation_deg)
-    eye = center + dist * np.array([np.cos(el) * np.cos(az), -np.cos(el) * np.sin(az), np.sin(el)])
+    eye = camera_on_sphere_position(center, dist, -az, el)  # azimuth toward -y: +y points right
 
     scene_graph = SceneGraph()
     scene_graph.AddRenderer(_RENDERER, MakeRenderEngineVtk(RenderEngineVtkParams(default_clear_color=[1.0, 1.0, 1.0])))
@@ -88,7 +76,8 @@ def render_mesh(
     query = scene_graph.get_query_output_port().Eval(context)
     w, h = size
     core = RenderCameraCore(_RENDERER, CameraInfo(w, h, np.radians(fov_y_deg)), ClippingRange(0.01, 10.0), RigidTransform())
-    image = query.RenderColorImage(ColorRenderCamera(core, False), scene_graph.world_frame_id(), look_at(eye, center))
+    image = query.RenderColorImage(ColorRenderCamera(core, False), scene_graph.world_frame_id(),
+                                     RigidTransform(look_at_matrix(eye, center)))
     return rgb_array(image)
 
 

@@ -118,12 +118,7 @@ class _HandDrawer:
 
     def body_poses(self, X_OH: np.ndarray, posture: np.ndarray) -> dict[str, RigidTransform]:
         """Pose in O of every hand body for the base link at ``X_OH`` (4x4) and a (9,) posture (rad)."""
-        models = self._models
-        values = dict(zip(models.HAND_ACTUATED_JOINTS, np.asarray(posture, float)))
-        for follower, (leader, mult, offset) in models.hand_mimic_joints().items():
-            values[follower] = mult * values[leader] + offset
-        for name, value in values.items():
-            self._plant.GetJointByName(name, self._hand).set_angle(self._context, float(value))
+        self._models.set_hand_angles(self._plant, self._context, self._hand, np.asarray(posture, float))
         self._plant.SetFreeBodyPose(self._context, self._base, RigidTransform(np.asarray(X_OH, float)))
         return {b.name(): self._plant.EvalBodyPoseInWorld(self._context, b) for b in self._bodies}
 

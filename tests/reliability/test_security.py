@@ -31,13 +31,13 @@ import pytest
 from catgrasp_drake.errors import InputError, ModelFileError
 
 REPO = Path(__file__).resolve().parents[2]
-SCANNED = ("catgrasp_drake", "diagrams", "benchmarks")
+SCANNED = ("catgrasp_drake", "diagrams", "benchmarks", "tools")
 #: The package runs no command; scripts may (argument lists only).
 NO_SUBPROCESS = ("catgrasp_drake",)
 #: Non-atomic writes that are not model/result files, each with its reason.
 WRITE_EXCEPTIONS = {
     ("catgrasp_drake/core/fileio.py", "*"): "the atomic writer itself (writes a temporary file, then renames)",
-    ("catgrasp_drake/data/ycb.py", "write_bytes"): "a scratch region mesh in a TemporaryDirectory, only rendered",
+    ("catgrasp_drake/viz/sheets.py", "write_bytes"): "a scratch region mesh in a TemporaryDirectory, only rendered",
     ("catgrasp_drake/data/cloud_io.py", "write_point_cloud"):
         "open3d writes into a TemporaryDirectory; the bytes are then written with atomic_write_bytes",
 }

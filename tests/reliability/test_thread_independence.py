@@ -19,8 +19,8 @@ from tests.core.test_synthetic_shapes import family
 
 
 def _run_with_threads(monkeypatch, n, fn):
-    monkeypatch.setattr(cpd, "_n_threads", lambda: n)
-    monkeypatch.setattr(inference, "_n_threads", lambda: n)
+    monkeypatch.setattr(cpd, "n_threads", lambda: n)
+    monkeypatch.setattr(inference, "n_threads", lambda: n)
     return fn()
 
 

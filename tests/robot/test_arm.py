@@ -9,7 +9,8 @@ from pydrake.multibody.plant import AddMultibodyPlant, MultibodyPlantConfig
 from pydrake.systems.framework import DiagramBuilder
 
 from catgrasp_drake.errors import InputError
-from catgrasp_drake.robot import models, ur10_model
+from catgrasp_drake.robot import models
+from tools import ur10_model
 
 
 @pytest.fixture(scope="module")
@@ -92,7 +93,7 @@ def test_make_parser_knows_the_package():
 
 
 def test_generator_reproduces_committed_arm_urdf():
-    assert ur10_model.build_urdf() == models.ARM_URDF_PATH.read_text(), "models/ur10/ur10.urdf is stale: rerun ur10_model"
+    assert ur10_model.build_urdf() == models.ARM_URDF_PATH.read_text(), "models/ur10/ur10.urdf is stale: rerun python -m tools.ur10_model"
 
 
 def test_arm_tracks_a_slow_trajectory_carrying_1_5_kg():

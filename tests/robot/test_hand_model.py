@@ -11,7 +11,8 @@ from pydrake.multibody.plant import AddMultibodyPlant, MultibodyPlantConfig
 from pydrake.systems.framework import DiagramBuilder
 
 from catgrasp_drake.errors import InputError
-from catgrasp_drake.robot import fitting, models, svh_model
+from catgrasp_drake.robot import models
+from tools import fitting, svh_model
 
 REFERENCE = Path(__file__).resolve().parents[2].parent / "shared" / "reference" / "schunk_svh"
 
@@ -144,7 +145,7 @@ def test_kinematics_match_reference_forward_kinematics(reference_dir, hand_plant
 
 def test_generator_reproduces_committed_urdf(reference_dir):
     text, bodies, joints = svh_model.generate(reference_dir)
-    assert text == models.HAND_URDF_PATH.read_text(), "models/svh/svh_right.urdf is stale: rerun svh_model"
+    assert text == models.HAND_URDF_PATH.read_text(), "models/svh/svh_right.urdf is stale: rerun python -m tools.svh_model"
     assert len(joints) == 20
 
 

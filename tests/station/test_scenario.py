@@ -5,13 +5,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from catgrasp_drake.core.visibility import look_at_matrix
 from catgrasp_drake.errors import InputError
 from catgrasp_drake.station.scenario import (
     DEFAULT_SCENARIO_FILE,
     Scenario,
     load_scenario,
     load_scenarios,
-    look_at_matrix,
     scenario_from_dict,
 )
 

@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from catgrasp_drake.robot.fitting import orthonormal_basis
+from tools.fitting import orthonormal_basis
 
 
 def rpy_to_matrix(rpy) -> np.ndarray:

@@ -2,7 +2,7 @@
 
 Run as::
 
-    python -m catgrasp_drake.robot.render_hand --out docs/hand.png --arm-out docs/arm_hand.png
+    python -m tools.render_hand --out docs/hand.png --arm-out docs/arm_hand.png
 
 ``docs/hand.png`` shows the SVH hand from four viewpoints (open and in the
 cylinder "closed" posture, palm side and back side); ``docs/arm_hand.png``
@@ -31,8 +31,9 @@ from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.sensors import CameraInfo
 
 from catgrasp_drake.core.fileio import atomic_write_bytes
+from catgrasp_drake.core.visibility import look_at_matrix
 from catgrasp_drake.robot import models
-from catgrasp_drake.viz.render import look_at, rgb_array
+from catgrasp_drake.viz.render import rgb_array
 
 _RENDERER = "robot_vtk"
 
@@ -58,21 +59,13 @@ def _build(with_arm: bool):
     return diagram, plant, scene_graph, hand, arm
 
 
-def _set_hand(plant, context, hand, posture: np.ndarray) -> None:
-    """Set the actuated joints and their mimic followers (coupler relation) kinematically."""
-    values = dict(zip(models.HAND_ACTUATED_JOINTS, posture))
-    for follower, (leader, mult, offset) in models.hand_mimic_joints().items():
-        values[follower] = mult * values[leader] + offset
-    for name, value in values.items():
-        plant.GetJointByName(name, hand).set_angle(context, float(value))
-
-
 def _render(diagram, scene_graph, context, eye, target, size=(480, 480), fov_deg=35.0) -> np.ndarray:
     sg_context = scene_graph.GetMyContextFromRoot(context)
     query = scene_graph.get_query_output_port().Eval(sg_context)
     w, h = size
     core = RenderCameraCore(_RENDERER, CameraInfo(w, h, np.radians(fov_deg)), ClippingRange(0.01, 20.0), RigidTransform())
-    image = query.RenderColorImage(ColorRenderCamera(core, False), scene_graph.world_frame_id(), look_at(eye, target))
+    image = query.RenderColorImage(ColorRenderCamera(core, False), scene_graph.world_frame_id(),
+                                     RigidTransform(look_at_matrix(eye, target)))
     return rgb_array(image)
 
 
@@ -104,7 +97,7 @@ def render_hand_picture() -> bytes:
     ]
     images, labels = [], []
     for label, q, eye in views:
-        _set_hand(plant, plant_context, hand, q)
+        models.set_hand_angles(plant, plant_context, hand, q)
         images.append(_render(diagram, scene_graph, context, eye, target))
         labels.append(f"SVH hand: {label}")
     return _sheet(images, labels, columns=2)
@@ -115,7 +108,7 @@ def render_arm_hand_picture() -> bytes:
     context = diagram.CreateDefaultContext()
     plant_context = plant.GetMyContextFromRoot(context)
     plant.SetPositions(plant_context, arm, models.ARM_HOME_POSITIONS)
-    _set_hand(plant, plant_context, hand, models.load_hand_postures("cylinder")["preshape"])
+    models.set_hand_angles(plant, plant_context, hand, models.load_hand_postures("cylinder")["preshape"])
     images = [
         _render(diagram, scene_graph, context, [1.2, -1.5, 1.1], [-0.5, -0.15, 0.4], size=(640, 560), fov_deg=45.0),
         _render(diagram, scene_graph, context, [-1.9, 1.5, 1.4], [-0.5, -0.15, 0.4], size=(640, 560), fov_deg=45.0),

@@ -2,7 +2,7 @@
 
 Run as::
 
-    python -m catgrasp_drake.robot.svh_model --reference ../shared/reference/schunk_svh --out models/svh
+    python -m tools.svh_model --reference ../shared/reference/schunk_svh --out models/svh
 
 What comes from where:
 
@@ -15,7 +15,7 @@ What comes from where:
   composing the fixed transforms, so all frames stay exact. The hand base link
   frame is the vendor's ``base_link`` frame.
 - Collision geometry: one primitive per vendor mesh, fitted to the mesh
-  vertices by :mod:`catgrasp_drake.robot.fitting` (capsules for finger, thumb
+  vertices by :mod:`tools.fitting` (capsules for finger, thumb
   and knuckle links; the palm housings get bounding boxes in the link frame; the
   round wrist piece a cylinder about the wrist axis). All hand geometry is
   compliant hydroelastic.
@@ -44,78 +44,18 @@ from pathlib import Path
 
 import numpy as np
 
+from catgrasp_drake.core.fileio import atomic_write_bytes
 from catgrasp_drake.errors import InputError, ModelFileError
-from catgrasp_drake.robot import fitting
-from catgrasp_drake.robot._urdf import combine_inertias, fmt, origin_xml, rotation_z_to, rpy_to_matrix, vec
+from catgrasp_drake.robot.specs import SVH_ACTUATED_JOINTS, SVH_ACTUATOR_GAINS, SVH_JOINT_NAMES, SVH_LINK_NAMES
+from tools import fitting
+from tools.urdf_util import combine_inertias, fmt, origin_xml, rotation_z_to, rpy_to_matrix, vec
 
-VENDOR_PREFIX = "right_hand_"
-
-#: Vendor link (one with a moving or no parent joint) -> project link name.
-LINK_NAMES: dict[str, str] = {
-    "base_link": "svh_base_link",
-    "right_hand_z": "svh_thumb_base_link",
-    "right_hand_a": "svh_thumb_proximal_link",
-    "right_hand_b": "svh_thumb_middle_link",
-    "right_hand_c": "svh_thumb_distal_link",
-    "right_hand_e2": "svh_palm_flex_link",
-    "right_hand_virtual_l": "svh_index_knuckle_link",
-    "right_hand_l": "svh_index_proximal_link",
-    "right_hand_p": "svh_index_middle_link",
-    "right_hand_t": "svh_index_distal_link",
-    "right_hand_k": "svh_middle_proximal_link",
-    "right_hand_o": "svh_middle_middle_link",
-    "right_hand_s": "svh_middle_distal_link",
-    "right_hand_virtual_j": "svh_ring_knuckle_link",
-    "right_hand_j": "svh_ring_proximal_link",
-    "right_hand_n": "svh_ring_middle_link",
-    "right_hand_r": "svh_ring_distal_link",
-    "right_hand_virtual_i": "svh_pinky_knuckle_link",
-    "right_hand_i": "svh_pinky_proximal_link",
-    "right_hand_m": "svh_pinky_middle_link",
-    "right_hand_q": "svh_pinky_distal_link",
-}
-
-#: Vendor joint -> project joint name (the 9 actuated joints first, in actuation order).
-JOINT_NAMES: dict[str, str] = {
-    "right_hand_Thumb_Flexion": "svh_thumb_flexion",
-    "right_hand_Thumb_Opposition": "svh_thumb_opposition",
-    "right_hand_Index_Finger_Proximal": "svh_index_proximal",
-    "right_hand_Index_Finger_Distal": "svh_index_distal",
-    "right_hand_Middle_Finger_Proximal": "svh_middle_proximal",
-    "right_hand_Middle_Finger_Distal": "svh_middle_distal",
-    "right_hand_Ring_Finger": "svh_ring",
-    "right_hand_Pinky": "svh_pinky",
-    "right_hand_Finger_Spread": "svh_finger_spread",
-    "right_hand_j3": "svh_thumb_j3",
-    "right_hand_j4": "svh_thumb_j4",
-    "right_hand_j5": "svh_palm_j5",
-    "right_hand_j12": "svh_ring_j12",
-    "right_hand_j13": "svh_pinky_j13",
-    "right_hand_j14": "svh_index_j14",
-    "right_hand_j15": "svh_middle_j15",
-    "right_hand_j16": "svh_ring_j16",
-    "right_hand_j17": "svh_pinky_j17",
-    "right_hand_index_spread": "svh_index_spread",
-    "right_hand_ring_spread": "svh_ring_spread",
-}
-
-ACTUATED_JOINTS: tuple[str, ...] = tuple(list(JOINT_NAMES.values())[:9])
-
-#: (PD proportional gain [N m/rad], derivative gain [N m s/rad], effort limit [N m]) per actuated joint.
-#: Kd/Kp = 0.15 s: a first-order closing time constant of ~0.15 s while the torque is
-#: below the limit, so a posture step closes in ~0.5 s; Kp·0.3 rad reaches the effort
-#: limit, so commanding "closed" ~0.3 rad beyond contact squeezes with the full limit.
-ACTUATOR_GAINS: dict[str, tuple[float, float, float]] = {
-    "svh_thumb_flexion": (12.0, 1.8, 3.5),
-    "svh_thumb_opposition": (12.0, 1.8, 3.5),
-    "svh_index_proximal": (10.0, 1.5, 3.0),
-    "svh_index_distal": (7.0, 1.05, 2.0),
-    "svh_middle_proximal": (10.0, 1.5, 3.0),
-    "svh_middle_distal": (7.0, 1.05, 2.0),
-    "svh_ring": (10.0, 1.5, 3.0),
-    "svh_pinky": (10.0, 1.5, 3.0),
-    "svh_finger_spread": (6.0, 0.9, 1.5),
-}
+#: Vendor link -> project link name, vendor joint -> project joint name (actuated first), PD gains:
+#: the runtime's tables (catgrasp_drake.robot.specs), written into the URDF here.
+LINK_NAMES = SVH_LINK_NAMES
+JOINT_NAMES = SVH_JOINT_NAMES
+ACTUATED_JOINTS = SVH_ACTUATED_JOINTS
+ACTUATOR_GAINS = SVH_ACTUATOR_GAINS
 
 #: Effort limit written on the (unactuated) mimic joints; unused by Drake for joints without actuator.
 MIMIC_EFFORT = 10.0
@@ -453,7 +393,7 @@ def _proximity_xml(kind: str) -> str:
 def build_urdf(bodies: dict[str, Body], joints: list[Joint], source_note: str) -> str:
     out = [
         '<?xml version="1.0"?>',
-        "<!-- Generated by catgrasp_drake.robot.svh_model; do not edit. -->",
+        "<!-- Generated by tools/svh_model.py; do not edit. -->",
         f"<!-- {source_note} -->",
         "<!-- Frames: svh_base_link = wrist axis origin, +z along the fingers, +y out of the palm"
         " (approach), +x from the index toward the little finger; thumb on the -x side. -->",
@@ -533,7 +473,7 @@ def generate(reference_dir: str | Path) -> tuple[str, dict[str, Body], list[Join
     assign_inertia(bodies)
     note = (
         "Kinematics (origins, axes, limits, mimic factors) from the Schunk SVH vendor URDF (FZI schunk_svh_driver,"
-        " LGPL); collision primitives fitted to its link meshes by catgrasp_drake.robot.fitting."
+        " LGPL); collision primitives fitted to its link meshes by tools/fitting.py."
     )
     return build_urdf(bodies, joints, note), bodies, joints
 
@@ -543,8 +483,6 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--reference", required=True, help="folder with the vendor svh_right.urdf and meshes/")
     ap.add_argument("--out", required=True, help="output folder (svh_right.urdf is written there)")
     args = ap.parse_args(argv)
-    from catgrasp_drake.core.fileio import atomic_write_bytes
-
     try:
         text, bodies, _ = generate(args.reference)
     except (InputError, ModelFileError) as exc:
