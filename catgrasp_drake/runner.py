@@ -41,26 +41,39 @@ from typing import Any, Callable, Iterable, Mapping, Sequence
 from catgrasp_drake.core.fileio import atomic_write_text
 from catgrasp_drake.errors import InputError, one_line
 
+
 def canonical_json(obj: Any) -> str:
     """Deterministic JSON text (sorted keys, no spaces) used for hashing."""
     return json.dumps(obj, sort_keys=True, separators=(",", ":"), allow_nan=False)
 
 
 def code_fingerprint(paths: Sequence[str | os.PathLike]) -> str:
-    """sha256 over the contents of the given files/directories (recursively, sorted).
+    """sha256 of the CONTENTS of the given files and directories (recursively): a cache's "code version".
 
-    Used as the "code version" of a cache: change any file that can change a
-    trial's outcome and the cached results are no longer reused.
+    Change any file that can change a trial's outcome and the cached results are
+    no longer reused. Each file contributes the sha256 of its bytes; a data file
+    (anything but ``.py``) also contributes its path relative to the listed path
+    it was found under (a data set's own names matter: ``drill_00.obj`` is
+    drill_00's mesh), a Python module does not (its name matters only to what
+    imports it, and that is hashed too). The contributions are sorted, so the
+    fingerprint depends neither on where the repository lives, nor on the order
+    of ``paths``, nor on which module a function lives in: moving code between
+    files without editing it keeps the caches. Files listed twice count once;
+    ``__pycache__`` and ``.pyc`` are skipped.
     """
-    h = hashlib.sha256()
+    entries = {}
     for root in paths:
         root = Path(root)
         files = sorted(p for p in root.rglob("*") if p.is_file()) if root.is_dir() else [root]
         for p in files:
-            if p.suffix in (".pyc",) or "__pycache__" in p.parts:
+            if p.suffix == ".pyc" or "__pycache__" in p.parts:
                 continue
-            h.update(str(p.relative_to(root.parent)).encode())
-            h.update(p.read_bytes())
+            name = "" if p.suffix == ".py" else (p.relative_to(root).as_posix() if root.is_dir() else p.name)
+            digest = hashlib.sha256(p.read_bytes()).hexdigest()
+            entries[p.resolve()] = hashlib.sha256(f"{name}\0{digest}".encode()).hexdigest()
+    h = hashlib.sha256()
+    for entry in sorted(entries.values()):
+        h.update(entry.encode())
     return h.hexdigest()[:16]
 
 

@@ -62,6 +62,34 @@ def test_code_fingerprint_tracks_file_contents(tmp_path):
     assert code_fingerprint([tmp_path]) != f1
 
 
+def test_code_fingerprint_follows_contents_not_locations(tmp_path):
+    """Moving a module (unedited) or the whole tree keeps the fingerprint; renaming a data file does not."""
+    for where in ("one", "two"):
+        (tmp_path / where / "pkg").mkdir(parents=True)
+        (tmp_path / where / "data").mkdir()
+    (tmp_path / "one" / "pkg" / "a.py").write_text("def f():\n    return 1\n")
+    (tmp_path / "one" / "data" / "drill_00.obj").write_text("v 0 0 0\n")
+    f1 = code_fingerprint([tmp_path / "one" / "pkg", tmp_path / "one" / "data"])
+    (tmp_path / "one" / "pkg" / "sub").mkdir()
+    (tmp_path / "one" / "pkg" / "a.py").rename(tmp_path / "one" / "pkg" / "sub" / "b.py")
+    assert code_fingerprint([tmp_path / "one" / "data", tmp_path / "one" / "pkg"]) == f1  # moved, any order
+    (tmp_path / "two" / "pkg" / "b.py").write_text("def f():\n    return 1\n")
+    (tmp_path / "two" / "data" / "drill_00.obj").write_text("v 0 0 0\n")
+    assert code_fingerprint([tmp_path / "two" / "pkg", tmp_path / "two" / "data"]) == f1  # another location
+    (tmp_path / "two" / "data" / "drill_00.obj").rename(tmp_path / "two" / "data" / "drill_01.obj")
+    assert code_fingerprint([tmp_path / "two" / "pkg", tmp_path / "two" / "data"]) != f1  # data names matter
+
+
+def test_trial_cache_key_ignores_the_offline_tools():
+    from catgrasp_drake.training import TRIAL_CODE_PATHS
+
+    repo = Path(__file__).resolve().parents[2]
+    listed = [Path(p).resolve() for p in TRIAL_CODE_PATHS]
+    assert all(p.exists() for p in listed), [p for p in listed if not p.exists()]
+    tools = (repo / "tools").resolve()
+    assert not any(p == tools or tools in p.parents or p in tools.parents for p in listed)
+
+
 _SCRIPT = """
 import sys, json
 sys.path.insert(0, {tests!r})
