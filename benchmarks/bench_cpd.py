@@ -136,7 +136,8 @@ def main(argv=None):
             sp = f"{ref[1] / dt:.1f}x" if ref else "-"
             spi = f"{(ref[1] / ref[2]) / (dt / it):.1f}x" if ref else "-"
             rr = f"{rms / ref[4]:.3f}" if ref else "-"
-            print(f"| {n} | {name} | {dt:.3f} | {it} | {1e3 * dt / it:.1f} | {rank} | {rms:.4f} | {sp} | {spi} | {rr} |")
+            print(f"| {n} | {name} | {dt:.3f} | {it} | {1e3 * dt / it:.1f} | {rank} | {rms:.4f} | {sp} | {spi} "
+                  f"| {rr} |")
     if not args.no_memory:
         n = max(args.sizes)
         Y, X, _ = make_problem(n)

@@ -57,8 +57,8 @@ def _table(records: list[dict]) -> list[str]:
     lines.append("-" * len(head))
     rej = [r for r in records if r["outcome"] == "rejected"]
     slow = max(rej, key=lambda r: r["seconds"]) if rej else None
-    lines.append(f"{'TOTAL (' + str(len(by_entry)) + ' entry points)':<36s} {totals['inputs']:6d} {totals['result']:7d} "
-                 f"{totals['rejected']:8d} {totals['crash']:7d} {totals['hang']:5d}  "
+    lines.append(f"{'TOTAL (' + str(len(by_entry)) + ' entry points)':<36s} {totals['inputs']:6d} "
+                 f"{totals['result']:7d} {totals['rejected']:8d} {totals['crash']:7d} {totals['hang']:5d}  "
                  + (f"{slow['seconds']:.3f} s  ({slow['entry']}: {slow['label'][:50]})" if slow else "-"))
     return lines
 

@@ -36,9 +36,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_real_drills import chamfer, load_drills, make_views  # noqa: E402
 
 from catgrasp_drake.core.cpd import initial_sigma2  # noqa: E402
-from catgrasp_drake.core.threads import single_threaded_blas  # noqa: E402
 from catgrasp_drake.core.inference import infer_latent_pose  # noqa: E402
 from catgrasp_drake.core.shape_space import build_shape_space  # noqa: E402
+from catgrasp_drake.core.threads import single_threaded_blas  # noqa: E402
 
 
 def lbfgs_fit(space, O, n_stages=4, w=0.05):

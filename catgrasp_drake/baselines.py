@@ -26,12 +26,11 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, field
 
-import numpy as np
-
 from catgrasp_drake.category_model import CategoryModel
 from catgrasp_drake.errors import InputError
 from catgrasp_drake.grasping.motion import GraspMotion
 from catgrasp_drake.prediction import ESTIMATORS, predict_motion, rigid_space
+from catgrasp_drake.systems.shape_estimator import estimate_on_table
 
 METHODS = ("latent", "rigid", "cpd", "nearest")
 
@@ -58,8 +57,6 @@ def predict_grasp(method: str, model: CategoryModel, observed_W, X_WT, *, camera
     The maths of each method is :func:`catgrasp_drake.prediction.predict_motion`
     (shared with the transfer diagram's predictor systems).
     """
-    from catgrasp_drake.systems.shape_estimator import estimate_on_table
-
     if method not in METHODS:
         raise InputError(f"unknown method {method!r}; known: {', '.join(METHODS)}")
     t0 = time.perf_counter()

@@ -22,13 +22,13 @@ statistics. Kind ``catgrasp.category_model``, version 1.
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from catgrasp_drake.core.deformation import warp_poses
 from catgrasp_drake.core.fileio import load_arrays, save_arrays
-from catgrasp_drake.core.regression import LinearRegressor
+from catgrasp_drake.core.regression import LinearRegressor, fit_ridge
 from catgrasp_drake.core.shape_space import ShapeSpace
 from catgrasp_drake.core.validation import positive, real_array, vector3
 from catgrasp_drake.errors import InputError, ModelFileError
@@ -119,9 +119,6 @@ class CategoryModel:
 
     def refit(self, alpha: float) -> "CategoryModel":
         """The same model with the regressor re-fitted on its stored training set with ridge ``alpha``."""
-        from dataclasses import replace
-
-        from catgrasp_drake.core.regression import fit_ridge
 
         if self.training_descriptors is None:
             raise InputError("this model file holds no training set to re-fit (trained by an older version)")

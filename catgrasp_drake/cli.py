@@ -1,6 +1,10 @@
 """``catgrasp`` command line: the project's main jobs.
 
 Progress and results are printed here, never inside the library.
+
+Each subcommand imports the stack it runs inside its handler (pydrake,
+open3d, trimesh, ray): ``catgrasp --help`` and a refused argument answer in
+a fraction of a second instead of after seconds of imports.
 """
 
 from __future__ import annotations
@@ -13,7 +17,6 @@ import time
 from pathlib import Path
 
 from catgrasp_drake.errors import CatgraspError, InputError, one_line
-
 
 # ----------------------------------------------------------------------------- argument checks
 # Bad arguments are refused before any work starts, each with one line naming it.
@@ -160,7 +163,8 @@ def _cmd_train(args) -> int:
     if not instances:
         names = list_instances(args.category)
         if not 0 <= args.hold_out <= len(names) - 2:
-            raise InputError(f"--hold-out: expected 0..{len(names) - 2} for {len(names)} instances, got {args.hold_out}")
+            raise InputError(f"--hold-out: expected 0..{len(names) - 2} for {len(names)} instances, "
+                             f"got {args.hold_out}")
         instances = names[:len(names) - args.hold_out]
         if args.canonical is not None and args.canonical not in instances:
             raise InputError(f"--canonical: {args.canonical!r} is held out; lower --hold-out or pick another")
@@ -187,7 +191,7 @@ def _cmd_train(args) -> int:
 
 
 def _cmd_evaluate(args) -> int:
-    from catgrasp_drake.evaluation import EvalConfig, format_table, evaluate, leave_two_out
+    from catgrasp_drake.evaluation import EvalConfig, evaluate, format_table, leave_two_out
 
     _check_instances(args.category, args.instances)
     folds = leave_two_out(args.category, args.folds)  # InputError for a bad --folds

@@ -13,11 +13,23 @@ to ``--out``.
 
 from __future__ import annotations
 
+import io
 import json
 import time
 from pathlib import Path
 
 import numpy as np
+from PIL import Image
+
+from catgrasp_drake.category_model import CategoryModel
+from catgrasp_drake.core.fileio import atomic_write_bytes, atomic_write_text
+from catgrasp_drake.core.rotations import rotation_angle
+from catgrasp_drake.data.dataset import CATEGORIES, list_instances, models_dir
+from catgrasp_drake.errors import InputError, ModelFileError
+from catgrasp_drake.station.scenario import load_scenario, random_placement, with_instance
+from catgrasp_drake.transfer import make_transfer_diagram, run_transfer
+from catgrasp_drake.viz.meshcat_tools import start_meshcat
+from catgrasp_drake.viz.render import rgb_array
 
 
 def _stage(name: str, seconds: float, detail: str) -> None:
@@ -25,16 +37,11 @@ def _stage(name: str, seconds: float, detail: str) -> None:
 
 
 def default_model_path(category: str) -> Path:
-    from catgrasp_drake.data.dataset import models_dir
-
     return models_dir() / "trained" / f"{category}.npz"
 
 
 def pick_novel_instance(model, requested: str | None) -> str:
     """``requested``, or the last instance of the category the model was not trained on."""
-    from catgrasp_drake.data.dataset import list_instances
-    from catgrasp_drake.errors import InputError
-
     names = list_instances(model.category)
     if requested is not None:
         if requested not in names:
@@ -48,13 +55,6 @@ def pick_novel_instance(model, requested: str | None) -> str:
 
 def _snapshot_png(td, context, path: Path) -> None:
     """The first camera's colour image at the current time, as a PNG."""
-    import io
-
-    from PIL import Image
-
-    from catgrasp_drake.core.fileio import atomic_write_bytes
-
-    from catgrasp_drake.viz.render import rgb_array
 
     sensor = next(iter(td.station.cameras.values()))
     image = sensor.color_image_output_port().Eval(sensor.GetMyContextFromRoot(context))
@@ -64,17 +64,6 @@ def _snapshot_png(td, context, path: Path) -> None:
 
 
 def run_demo(args) -> int:
-    from catgrasp_drake.category_model import CategoryModel
-    from catgrasp_drake.core.fileio import atomic_write_text
-    from catgrasp_drake.core.rotations import rotation_angle
-    from catgrasp_drake.errors import ModelFileError
-    from catgrasp_drake.station.scenario import load_scenario, random_placement, with_instance
-    from catgrasp_drake.transfer import make_transfer_diagram, run_transfer
-    from catgrasp_drake.viz.meshcat_tools import start_meshcat
-
-    from catgrasp_drake.data.dataset import CATEGORIES
-    from catgrasp_drake.errors import InputError
-
     t_start = time.perf_counter()
     out = Path(args.out)
     if args.model is None and args.category not in CATEGORIES:

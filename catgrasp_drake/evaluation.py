@@ -28,6 +28,7 @@ retrained model never reuses trials of the old one.
 
 from __future__ import annotations
 
+import hashlib
 import json
 import time
 from dataclasses import asdict, dataclass, field
@@ -36,10 +37,20 @@ from typing import Callable
 
 import numpy as np
 
-from catgrasp_drake.baselines import METHODS
-from catgrasp_drake.errors import InputError, one_line
+from catgrasp_drake.baselines import METHODS, predict_grasp
+from catgrasp_drake.category_model import CategoryModel
+from catgrasp_drake.core.fileio import atomic_write_text
+from catgrasp_drake.data.dataset import list_instances
+from catgrasp_drake.errors import InputError, ModelFileError, one_line
+from catgrasp_drake.runner import code_fingerprint, run_tasks
+from catgrasp_drake.station.scenario import load_scenario, random_placement, with_instance
+from catgrasp_drake.training import TRIAL_CODE_PATHS, TrainingConfig, train_category
+from catgrasp_drake.transfer import VIEWS, observe
+from catgrasp_drake.trial import run_grasp_trial
+from catgrasp_drake.viz.charts import table_chart
 
-VIEWS = ("full", "single")
+#: The views evaluated by default, in the paper's Table I order (full view first).
+DEFAULT_VIEWS = ("full", "single")
 RECORDS_FORMAT = "catgrasp.eval_records"
 REPORT_FORMAT = "catgrasp.eval_report"
 FORMAT_VERSION = 1
@@ -62,7 +73,7 @@ class EvalConfig:
 
     category: str
     methods: tuple[str, ...] = METHODS
-    views: tuple[str, ...] = VIEWS
+    views: tuple[str, ...] = DEFAULT_VIEWS
     seed: int = 0
     folds: int | None = None  # None: FOLDS[category]
     instances: tuple[str, ...] | None = None
@@ -82,8 +93,6 @@ class EvalConfig:
 
 def leave_two_out(category: str, folds: int | None = None) -> list[tuple[list[str], list[str]]]:
     """``[(train instances, test instances), ...]``: the canonical (first) instance always trains."""
-    from catgrasp_drake.data.dataset import list_instances
-
     names = list_instances(category)
     n = FOLDS.get(category, (len(names) - 1) // 2) if folds is None else int(folds)
     if not 1 <= n <= (len(names) - 1) // 2:
@@ -98,12 +107,6 @@ def leave_two_out(category: str, folds: int | None = None) -> list[tuple[list[st
 
 def eval_trial_task(spec: dict) -> dict:
     """Worker task: one test instance, view, method and seed on one fold model -> a JSON-able record."""
-    from catgrasp_drake.baselines import predict_grasp
-    from catgrasp_drake.category_model import CategoryModel
-    from catgrasp_drake.station.scenario import load_scenario, random_placement, with_instance
-    from catgrasp_drake.trial import run_grasp_trial
-    from catgrasp_drake.transfer import observe
-
     model = CategoryModel.load(spec["model"], category=spec["category"])
     scenario = random_placement(with_instance(load_scenario(f"{spec['category']}_default"), spec["instance"]),
                                 spec["seed"])
@@ -123,9 +126,6 @@ def eval_trial_task(spec: dict) -> dict:
 
 
 def eval_code_version() -> str:
-    from catgrasp_drake.runner import code_fingerprint
-    from catgrasp_drake.training import TRIAL_CODE_PATHS
-
     root = Path(__file__).resolve().parent
     return code_fingerprint(list(TRIAL_CODE_PATHS) + [root / "baselines.py", root / "core", root / "transfer.py",
                                                        root / "category_model.py", root / "evaluation.py"])
@@ -133,16 +133,13 @@ def eval_code_version() -> str:
 
 def fold_model(config: EvalConfig, fold: int, train: list[str], progress=None) -> Path:
     """The fold's model file under ``out_dir`` (trained unless already there)."""
-    from catgrasp_drake.category_model import CategoryModel
-    from catgrasp_drake.errors import ModelFileError
-    from catgrasp_drake.training import TrainingConfig, train_category
-
     path = Path(config.out_dir) / config.category / f"fold{fold}.npz"
     if path.is_file():
         try:
             CategoryModel.load(path, category=config.category)  # checks format, version and checksum
         except (ModelFileError, InputError) as e:
-            raise ModelFileError(f"{one_line(e, with_type=False)} (fold {fold} model; delete it to retrain it)") from None
+            raise ModelFileError(
+                f"{one_line(e, with_type=False)} (fold {fold} model; delete it to retrain it)") from None
         return path
     # the fold models' grasp trials are cached under out_dir too (shared by the folds and categories), so
     # an interrupted evaluation resumes from the same folder whatever the working directory
@@ -154,8 +151,6 @@ def fold_model(config: EvalConfig, fold: int, train: list[str], progress=None) -
 
 
 def file_sha256(path: str | Path) -> str:
-    import hashlib
-
     return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
 
@@ -242,8 +237,6 @@ class EvalReport:
 
 def evaluate(config: EvalConfig, *, progress: Callable[[str, int, int], None] | None = None) -> EvalReport:
     """Run the protocol (module docstring); writes ``<out_dir>/<category>/records.jsonl`` and ``report.json``."""
-    from catgrasp_drake.runner import run_tasks
-
     t0 = time.perf_counter()
     folds = leave_two_out(config.category, config.folds)
     wanted = set(config.instances) if config.instances is not None else None
@@ -285,22 +278,16 @@ def evaluate(config: EvalConfig, *, progress: Callable[[str, int, int], None] | 
 
 def write_chart(category: str, table: dict, path) -> None:
     """PNG bar chart of Table I, the paper's figures first (where the paper has them)."""
-    from catgrasp_drake.viz.charts import table_chart
-
     rows = ({"paper": PAPER_TABLE[category]} if category in PAPER_TABLE else {}) | table
     table_chart(category, rows, path)
 
 
 def _sha256_text(text: str) -> str:
-    import hashlib
-
     return hashlib.sha256(text.encode("utf-8")).hexdigest()
 
 
 def write_records(path: str | Path, records: list[dict]) -> None:
     """Write trial records as JSON lines (atomically), after a header line with their count and sha256."""
-    from catgrasp_drake.core.fileio import atomic_write_text
-
     body = "".join(json.dumps(r, sort_keys=True) + "\n" for r in records)
     header = {"format": RECORDS_FORMAT, "format_version": FORMAT_VERSION, "records": len(records),
               "sha256": _sha256_text(body)}
@@ -315,8 +302,6 @@ def load_records(path: str | Path) -> list[dict]:
     match its header's record count and checksum. (A file without the header
     line, written before it existed, is read without the checks.)
     """
-    from catgrasp_drake.errors import ModelFileError
-
     path = Path(path)
     try:
         text = path.read_text(encoding="utf-8")
@@ -356,8 +341,6 @@ def load_records(path: str | Path) -> list[dict]:
 
 def write_report(path: str | Path, report: dict) -> None:
     """Write ``report.json`` atomically with its format, version and sha256 (over the other fields)."""
-    from catgrasp_drake.core.fileio import atomic_write_text
-
     body = json.loads(json.dumps(report, default=str))  # what the file will hold
     out = {"format": REPORT_FORMAT, "format_version": FORMAT_VERSION} | body
     out["sha256"] = _sha256_text(json.dumps(out, sort_keys=True))
@@ -366,8 +349,6 @@ def write_report(path: str | Path, report: dict) -> None:
 
 def load_report(path: str | Path) -> dict:
     """Read ``report.json`` back; ModelFileError (one line, naming the file) when corrupt or of another format."""
-    from catgrasp_drake.errors import ModelFileError
-
     path = Path(path)
     try:
         data = json.loads(path.read_text(encoding="utf-8"))

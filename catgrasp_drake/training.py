@@ -37,12 +37,16 @@ from catgrasp_drake.category_model import CategoryModel
 from catgrasp_drake.core.deformation import inverse_warp_poses, warp_poses
 from catgrasp_drake.core.regression import fit_ridge
 from catgrasp_drake.core.shape_space import build_shape_space
+from catgrasp_drake.data.dataset import instance_clouds, list_instances, load_annotations
 from catgrasp_drake.errors import InputError
 from catgrasp_drake.grasping.constraints import load_constraint
 from catgrasp_drake.grasping.descriptor import descriptor_vector
 from catgrasp_drake.grasping.motion import GraspMotion
 from catgrasp_drake.grasping.sampling import SamplingParams, perturb_poses, perturbations
 from catgrasp_drake.runner import code_fingerprint, run_tasks
+from catgrasp_drake.station.handwritten import load_handwritten_motion
+from catgrasp_drake.station.scenario import load_scenario
+from catgrasp_drake.trial import run_grasp_trial
 
 _ROOT = Path(__file__).resolve().parents[1]
 #: Files whose contents decide a trial's outcome: the trial cache is keyed by their hash.
@@ -95,9 +99,6 @@ class TrainingConfig:
 
 def grasp_trial_task(spec: dict) -> dict:
     """Worker task: one grasp trial of ``spec["motion"]`` (object frame) on one instance."""
-    from catgrasp_drake.station.scenario import load_scenario
-    from catgrasp_drake.trial import run_grasp_trial
-
     base = load_scenario(spec["scenario"])
     scenario = base.replace(name=f"{spec['scenario']}:{spec['instance']}",
                             object=dataclasses.replace(base.object, category=spec["category"],
@@ -182,9 +183,6 @@ def train_category(
     "trials" progress. Raises InputError when no instance gets a functional
     success (nothing to learn from).
     """
-    from catgrasp_drake.data.dataset import instance_clouds, list_instances, load_annotations
-    from catgrasp_drake.station.handwritten import load_handwritten_motion
-
     t0 = time.perf_counter()
     instances = list(instances) if instances is not None else list_instances(category)
     if len(instances) < 2:

@@ -26,9 +26,10 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
+import trimesh
+from pydrake.common.value import AbstractValue
 from pydrake.geometry import Meshcat, Rgba
 from pydrake.perception import Concatenate, PointCloud
-from pydrake.common.value import AbstractValue
 from pydrake.systems.analysis import InitializeParams
 from pydrake.systems.framework import DiagramBuilder, EventStatus, LeafSystem
 from pydrake.systems.primitives import ConstantValueSource
@@ -75,6 +76,16 @@ def ring_cameras(scenario: Scenario, n: int = FULL_VIEW_CAMERAS, distance: float
 class CloudMerger(LeafSystem):
     """Concatenates point clouds (Drake's ``Concatenate``).
 
+    .. pydrake_system::
+
+        name: CloudMerger
+        input_ports:
+        - cloud_0
+        - ...
+        - cloud_{n-1}
+        output_ports:
+        - point_cloud_W
+
     Input ports:
         cloud_0 ... cloud_{n-1}: ``PointCloud`` (xyz, metres, world frame W).
     Output ports:
@@ -90,6 +101,15 @@ class CloudMerger(LeafSystem):
 
 class TransferVisualizer(LeafSystem):
     """Draws the transfer's intermediate results on Meshcat once, when the simulation starts.
+
+    .. pydrake_system::
+
+        name: TransferVisualizer
+        input_ports:
+        - object_cloud_W
+        - estimate
+        - grasp_motion_W
+        - plan
 
     Input ports:
         object_cloud_W: ``PointCloud`` the camera's object cloud (W).
@@ -165,8 +185,6 @@ class TransferDiagram:
 
 def true_object_points_W(scenario: Scenario) -> np.ndarray:
     """Vertices (N, 3) of the scenario's true object mesh at its initial pose, in W (the ablation's obstacle)."""
-    import trimesh  # deferred: heavy, and only the true-object ablation needs it
-
     o = scenario.object
     if o.primitive is not None or o.instance is None:
         raise InputError("the true-object planner needs a data-set or imported object, not a primitive")

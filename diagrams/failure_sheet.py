@@ -27,11 +27,10 @@ def main(argv=None) -> int:
     from catgrasp_drake.baselines import predict_grasp
     from catgrasp_drake.category_model import CategoryModel
     from catgrasp_drake.evaluation import load_records
-    from catgrasp_drake.robot.models import ARM_JOINTS
-    from catgrasp_drake.robot.models import hand_joint_angles
+    from catgrasp_drake.robot.models import ARM_JOINTS, hand_joint_angles
     from catgrasp_drake.station.scenario import load_scenario, random_placement, with_instance
-    from catgrasp_drake.trial import plan_for, trial_diagram
     from catgrasp_drake.transfer import observe
+    from catgrasp_drake.trial import plan_for, trial_diagram
     from catgrasp_drake.viz.render import contact_sheet, rgb_array
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])

@@ -104,9 +104,9 @@ def main(argv=None) -> int:
 
     def progress(outcome, done, total):
         r = outcome.result
-        sys.stderr.write(f"[{done}/{total}] {outcome.spec['instance']}: "
-                         f"{'error' if r.get('status') == 'error' else ('ok' if r.get('functional') else r.get('reason'))}"
-                         f"{' (cached)' if outcome.cached else ''}\n")
+        what = "error" if r.get("status") == "error" else ("ok" if r.get("functional") else r.get("reason"))
+        cached = " (cached)" if outcome.cached else ""
+        sys.stderr.write(f"[{done}/{total}] {outcome.spec['instance']}: {what}{cached}\n")
 
     outcomes = run_tasks(sweep_task, specs, cache_dir=None if args.no_cache else args.cache,
                          code_version=code_version(), workers=args.workers, progress=progress)
@@ -119,8 +119,8 @@ def main(argv=None) -> int:
         sel = [r for r in rows if r["category"] == c]
         if not sel:
             continue
-        out.write(f"\n{c}\n{'instance':18s} {'grasp':6s} {'functional':10s} {'reason':26s} {'rise(m)':>8s} {'tilt':>6s} "
-                  f"{'F_trig(N)':>9s} {'shift(mm)':>9s} {'turn':>5s} {'wall(s)':>7s}\n")
+        out.write(f"\n{c}\n{'instance':18s} {'grasp':6s} {'functional':10s} {'reason':26s} {'rise(m)':>8s} "
+                  f"{'tilt':>6s} {'F_trig(N)':>9s} {'shift(mm)':>9s} {'turn':>5s} {'wall(s)':>7s}\n")
         for r in sel:
             if r.get("status") == "error":
                 out.write(f"{r['instance']:18s} {'-':6s} {'-':10s} error: {r['error'][:60]}\n")

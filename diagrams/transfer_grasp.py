@@ -36,8 +36,8 @@ def main(argv=None) -> int:
     from catgrasp_drake.core.fileio import atomic_write_bytes
     from catgrasp_drake.demo import default_model_path, pick_novel_instance
     from catgrasp_drake.station.scenario import load_scenario, random_placement, with_instance
-    from catgrasp_drake.trial import judge_spec, simulate_and_judge
     from catgrasp_drake.transfer import make_transfer_diagram
+    from catgrasp_drake.trial import judge_spec, simulate_and_judge
     from catgrasp_drake.viz.meshcat_tools import start_meshcat
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])

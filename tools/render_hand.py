@@ -63,7 +63,8 @@ def _render(diagram, scene_graph, context, eye, target, size=(480, 480), fov_deg
     sg_context = scene_graph.GetMyContextFromRoot(context)
     query = scene_graph.get_query_output_port().Eval(sg_context)
     w, h = size
-    core = RenderCameraCore(_RENDERER, CameraInfo(w, h, np.radians(fov_deg)), ClippingRange(0.01, 20.0), RigidTransform())
+    core = RenderCameraCore(_RENDERER, CameraInfo(w, h, np.radians(fov_deg)), ClippingRange(0.01, 20.0),
+                            RigidTransform())
     image = query.RenderColorImage(ColorRenderCamera(core, False), scene_graph.world_frame_id(),
                                      RigidTransform(look_at_matrix(eye, target)))
     return rgb_array(image)

@@ -347,7 +347,8 @@ def assign_inertia(bodies: dict[str, Body]) -> None:
     for body in bodies.values():
         if body.name in _PALM_BODIES:
             continue
-        body.mass, body.com, body.inertia = combine_inertias([_primitive_inertia(k, f, FINGER_DENSITY) for k, f, _ in body.primitives])
+        parts = [_primitive_inertia(k, f, FINGER_DENSITY) for k, f, _ in body.primitives]
+        body.mass, body.com, body.inertia = combine_inertias(parts)
         finger_mass += body.mass
     palm_volume = sum(f.volume for name in _PALM_BODIES for _, f, _ in bodies[name].primitives)
     palm_density = (HAND_TOTAL_MASS - finger_mass) / palm_volume
@@ -355,7 +356,8 @@ def assign_inertia(bodies: dict[str, Body]) -> None:
         raise InputError("finger links alone exceed HAND_TOTAL_MASS; lower FINGER_DENSITY")
     for name in _PALM_BODIES:
         body = bodies[name]
-        body.mass, body.com, body.inertia = combine_inertias([_primitive_inertia(k, f, palm_density) for k, f, _ in body.primitives])
+        parts = [_primitive_inertia(k, f, palm_density) for k, f, _ in body.primitives]
+        body.mass, body.com, body.inertia = combine_inertias(parts)
 
 
 # --------------------------------------------------------------------------- writing
@@ -437,7 +439,8 @@ def build_urdf(bodies: dict[str, Body], joints: list[Joint], source_note: str) -
         out.append(f"    {origin_xml(j.X_PJ)}")
         out.append(f'    <axis xyz="{vec(j.axis)}"/>')
         out.append(
-            f'    <limit lower="{fmt(j.lower)}" upper="{fmt(j.upper)}" velocity="{fmt(j.velocity)}" effort="{fmt(effort)}"/>'
+            f'    <limit lower="{fmt(j.lower)}" upper="{fmt(j.upper)}" velocity="{fmt(j.velocity)}" '
+            f'effort="{fmt(effort)}"/>'
         )
         out.append(f'    <dynamics damping="{fmt(JOINT_DAMPING)}"/>')
         if j.mimic is not None:

@@ -148,7 +148,8 @@ def _inertia(kind: str, r: float, length: float, X: np.ndarray, density: float):
         mh = density * 2 / 3 * math.pi * r**3
         m = mc + 2 * mh
         i_axis = mc * r * r / 2 + 2 * mh * 2 * r * r / 5
-        i_perp = mc * (r * r / 4 + length * length / 12) + 2 * mh * (2 * r * r / 5 + length * length / 4 + 3 * length * r / 8)
+        i_perp = (mc * (r * r / 4 + length * length / 12)
+                  + 2 * mh * (2 * r * r / 5 + length * length / 4 + 3 * length * r / 8))
     return m, X[:3, 3], R @ np.diag([i_perp, i_perp, i_axis]) @ R.T
 
 
@@ -173,13 +174,13 @@ def build_urdf() -> str:
             f' iyy="{fmt(inertia[1, 1])}" iyz="{fmt(inertia[1, 2])}" izz="{fmt(inertia[2, 2])}"/>'
         )
         out.append("    </inertial>")
-        for k, (kind, geom, X, _, _) in enumerate(geoms):
+        for k, (_, geom, X, _, _) in enumerate(geoms):
             out.append(f'    <visual name="{name}_visual_{k}">')
             out.append(f"      {origin_xml(X)}")
             out.append(f"      <geometry>{geom}</geometry>")
             out.append(f'      <material name="{name}_color"><color rgba="{vec(_COLORS[name])}"/></material>')
             out.append("    </visual>")
-        for k, (kind, geom, X, _, _) in enumerate(geoms):
+        for k, (_, geom, X, _, _) in enumerate(geoms):
             out.append(f'    <collision name="{name}_collision_{k}">')
             out.append(f"      {origin_xml(X)}")
             out.append(f"      <geometry>{geom}</geometry>")

@@ -1,4 +1,5 @@
-"""The project's benchmark: held-out test split, every method through the transfer diagram, the strict judge, bootstrap intervals.
+"""The project's benchmark: held-out test split, every method through the transfer diagram, the strict judge,
+bootstrap intervals.
 
 - :mod:`catgrasp_drake.benchmark.runner`: splits, placements, the trial task, ``run_benchmark``;
 - :mod:`catgrasp_drake.benchmark.stats`: bootstrap intervals over instances, paired differences;

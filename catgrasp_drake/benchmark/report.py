@@ -504,7 +504,7 @@ def _regions(text: str, path, names: Iterable[str] | None = None) -> dict[str, t
                              f"expected one <!-- benchmark:{name} --> before one <!-- /benchmark:{name} -->)")
         out[name] = (o[0].end(), c[0].start())
     spans = sorted(out.values())
-    for (s0, e0), (s1, _) in zip(spans, spans[1:]):
+    for (_, e0), (s1, _) in zip(spans, spans[1:]):
         if s1 < e0:
             raise InputError(f"{path}: benchmark markers are nested or overlap")
     for name, (s, e) in out.items():

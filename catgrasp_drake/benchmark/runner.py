@@ -101,7 +101,8 @@ class BenchmarkConfig:
         if not (isinstance(self.placements, int) and 1 <= self.placements <= 1000):
             raise InputError(f"placements: expected an integer in 1..1000, got {self.placements!r}")
         if not (isinstance(self.instances_per_category, int) and self.instances_per_category >= 1):
-            raise InputError(f"instances_per_category: expected a positive integer, got {self.instances_per_category!r}")
+            raise InputError("instances_per_category: expected a positive integer, "
+                             f"got {self.instances_per_category!r}")
         if not 0.0 <= self.min_confidence <= 1.0:
             raise InputError(f"min_confidence: expected a value in [0, 1], got {self.min_confidence}")
 

@@ -97,7 +97,7 @@ def pca_em(Y, q: int, *, center: bool = True, max_iter: int = 1000, tol: float =
     converged = False
     it = 0
     total = float((Yc * Yc).sum())
-    for it in range(1, int(max_iter) + 1):
+    for it in range(1, int(max_iter) + 1):  # noqa: B007 (the count is returned)
         X = np.linalg.lstsq(L, Yc.T, rcond=None)[0].T  # = Y L (L^T L)^-1   (K, q)
         L = np.linalg.lstsq(X, Yc, rcond=None)[0].T  # = Y^T X (X^T X)^-1 (p, q)
         err = float(((Yc - X @ L.T) ** 2).sum())
@@ -320,13 +320,15 @@ def _fit_space(canonical, Ws: np.ndarray, *, beta, lam, w, variance, standardize
     if standardize == "global":
         std = math.sqrt(float(feat_var.mean()))
         if std <= _MIN_STD_M:
-            raise InputError("build_shape_space: all instances deform the canonical shape identically; no shape variation")
+            raise InputError("build_shape_space: all instances deform the canonical shape identically; "
+                             "no shape variation")
         feature_std = np.full(Y.shape[1], std)
     elif standardize == "feature":
         fs = np.sqrt(feat_var)
         floor = 1e-6 * max(float(fs.max()), 1e-300)
         if fs.max() <= _MIN_STD_M:
-            raise InputError("build_shape_space: all instances deform the canonical shape identically; no shape variation")
+            raise InputError("build_shape_space: all instances deform the canonical shape identically; "
+                             "no shape variation")
         feature_std = np.maximum(fs, floor)
     else:
         raise InputError(f"standardize: expected 'global' or 'feature', got {standardize!r}")

@@ -75,7 +75,8 @@ def camera_on_sphere_position(center, distance: float, azimuth: float, elevation
     c = vector3(center, "center")
     d = positive(distance, "distance")
     azimuth, elevation = real_number(azimuth, "azimuth"), real_number(elevation, "elevation")
-    return c + d * np.array([np.cos(elevation) * np.cos(azimuth), np.cos(elevation) * np.sin(azimuth), np.sin(elevation)])
+    return c + d * np.array([np.cos(elevation) * np.cos(azimuth), np.cos(elevation) * np.sin(azimuth),
+                             np.sin(elevation)])
 
 
 def look_at_matrix(eye, target, up=(0.0, 0.0, 1.0)) -> np.ndarray:

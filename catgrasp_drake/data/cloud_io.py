@@ -5,6 +5,7 @@ Clouds are returned as ``(N, 3)`` float64 arrays in metres.
 
 from __future__ import annotations
 
+import io
 import os
 import tempfile
 from pathlib import Path
@@ -202,8 +203,6 @@ def write_point_cloud(path: str | os.PathLike, points) -> None:
     suffix = _suffix(path)
     points = as_points(points, "points")
     if suffix == ".npy":
-        import io
-
         buf = io.BytesIO()
         np.save(buf, points, allow_pickle=False)
         atomic_write_bytes(path, buf.getvalue())

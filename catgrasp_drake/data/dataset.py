@@ -26,6 +26,8 @@ import trimesh
 
 from catgrasp_drake.core.fileio import atomic_write_bytes, atomic_write_text
 from catgrasp_drake.data.categories import DENSITY_KG_M3, GeneratedInstance, generate_instance
+from catgrasp_drake.data.meshes import read_mesh
+from catgrasp_drake.data.pointclouds import full_cloud
 from catgrasp_drake.errors import InputError, ModelFileError
 
 #: Categories of the embedded data set and how many instances each has
@@ -106,15 +108,11 @@ def load_annotations(category: str, instance: str) -> dict:
 
 def instance_clouds(category: str, instances, voxel: float = 0.01) -> list:
     """Full clouds (ray-casting + voxel grid; instance frame, metres) of the given instances."""
-    from catgrasp_drake.data.pointclouds import full_cloud
-
     return [full_cloud(load_mesh(category, n), voxel=voxel) for n in instances]
 
 
 def load_mesh(category: str, instance: str) -> trimesh.Trimesh:
     """The instance's watertight mesh (canonical frame, metres)."""
-    from catgrasp_drake.data.meshes import read_mesh
-
     return read_mesh(instance_mesh_path(category, instance))
 
 

@@ -36,7 +36,8 @@ def read_mesh(path: str | os.PathLike, *, require_watertight: bool = False) -> t
         raise ModelFileError(f"{path}: mesh has NaN or inf vertices")
     extent = float(np.linalg.norm(mesh.extents))
     if extent > MAX_OBJECT_EXTENT_M:
-        raise InputError(f"{path}: mesh spans {extent:.3g} units; expected metres. Is it in millimetres? Scale by 0.001.")
+        raise InputError(f"{path}: mesh spans {extent:.3g} units; expected metres. "
+                         "Is it in millimetres? Scale by 0.001.")
     if require_watertight and not mesh.is_watertight:
         raise InputError(f"{path}: mesh is not watertight (has holes); repair it or use a closed mesh")
     return mesh

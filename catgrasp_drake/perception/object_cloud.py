@@ -22,7 +22,6 @@ from pydrake.systems.sensors import CameraInfo, ImageDepth32F, ImageLabel16I, Pi
 from catgrasp_drake.core.validation import MAX_COORDINATE_M, count, non_negative, real_array
 from catgrasp_drake.errors import InputError
 
-
 # ----------------------------------------------------------------------------- pure maths
 #: Depth noise models of :func:`_mask_depth`.
 NOISE_MODELS = ("gaussian", "kinect")
@@ -114,6 +113,15 @@ def cloud_from_points(points: np.ndarray) -> PointCloud:
 class LabelDepthMask(LeafSystem):
     """Keeps the depth pixels of one render label (NaN elsewhere), with optional depth noise.
 
+    .. pydrake_system::
+
+        name: LabelDepthMask
+        input_ports:
+        - depth_image
+        - label_image
+        output_ports:
+        - depth_image
+
     Input ports:
         depth_image: ``ImageDepth32F`` (metres).
         label_image: ``ImageLabel16I`` of the same size.
@@ -162,6 +170,14 @@ class LabelDepthMask(LeafSystem):
 class CloudCropVoxel(LeafSystem):
     """Drops non-finite points, crops to a box and voxel-down-samples a point cloud.
 
+    .. pydrake_system::
+
+        name: CloudCropVoxel
+        input_ports:
+        - point_cloud
+        output_ports:
+        - point_cloud
+
     Input ports:
         point_cloud: ``PointCloud`` (xyz, metres, any frame F).
     Output ports:
@@ -191,6 +207,16 @@ class ObjectCloudSystem(Diagram):
     """The object's segmented point cloud in the world frame W from one depth camera C.
 
     ``LabelDepthMask`` -> Drake ``DepthImageToPointCloud`` -> ``CloudCropVoxel``.
+
+    .. pydrake_system::
+
+        name: ObjectCloudSystem
+        input_ports:
+        - depth_image
+        - label_image
+        - camera_pose
+        output_ports:
+        - object_cloud_W
 
     Input ports:
         depth_image: ``ImageDepth32F``, metres along the camera's z (RgbdSensor ``depth_image_32f``).

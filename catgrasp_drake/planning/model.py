@@ -47,7 +47,7 @@ class PlanningModel:
 
     @classmethod
     def of_station(cls, diagram, station: StationHandles) -> "PlanningModel":
-        """The built ``diagram`` holding ``station`` as a planning model; its obstacle is the station's (true) object."""
+        """The built ``diagram`` holding ``station`` as a planning model; its obstacle is the station's true object."""
         return cls(diagram, station.plant, station.scene_graph, station.arm, station.hand, station.table,
                    np.asarray(station.scenario.arm_q_home, float), station.object_instance)
 

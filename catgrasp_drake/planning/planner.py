@@ -134,7 +134,8 @@ def pregrasp_seeds(q_start: np.ndarray, params: PlanParams):
             yield distance, wrist_up, seed
     rng = np.random.default_rng(20181)
     for _ in range(params.pregrasp_restarts):
-        yield params.min_distance, False, q_start + rng.uniform(-1.0, 1.0, 6) * np.array([1.2, 1.0, 1.5, 1.5, np.pi, np.pi])
+        spread = np.array([1.2, 1.0, 1.5, 1.5, np.pi, np.pi])
+        yield params.min_distance, False, q_start + rng.uniform(-1.0, 1.0, 6) * spread
 
 
 def approach_candidates(c: PlanningScene, X_WPre: RigidTransform, q_start: np.ndarray, q_pre: np.ndarray,

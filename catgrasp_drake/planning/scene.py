@@ -20,7 +20,7 @@ from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.multibody.inverse_kinematics import InverseKinematics
 from pydrake.multibody.plant import MultibodyPlant
 from pydrake.multibody.tree import ModelInstanceIndex
-from pydrake.solvers import Solve, SnoptSolver
+from pydrake.solvers import SnoptSolver, Solve
 
 from catgrasp_drake.planning.records import PlanParams
 from catgrasp_drake.robot.models import ARM_JOINTS, HAND_ACTUATED_JOINTS, HAND_BASE_LINK, hand_joint_angles

@@ -24,8 +24,16 @@ from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
-from pydrake.geometry import Box, Cylinder, MakeRenderEngineVtk, ProximityProperties, RenderEngineVtkParams
-from pydrake.geometry import AddCompliantHydroelasticProperties, AddContactMaterial, AddRigidHydroelasticProperties
+from pydrake.geometry import (
+    AddCompliantHydroelasticProperties,
+    AddContactMaterial,
+    AddRigidHydroelasticProperties,
+    Box,
+    Cylinder,
+    MakeRenderEngineVtk,
+    ProximityProperties,
+    RenderEngineVtkParams,
+)
 from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.multibody.plant import AddMultibodyPlant, CoulombFriction, MultibodyPlantConfig
 from pydrake.multibody.tree import PdControllerGains, PrismaticJoint, SpatialInertia, UnitInertia
@@ -126,9 +134,11 @@ def simulate_cylinder_grasp(
     AddRigidHydroelasticProperties(properties=table_props)
     X_WTable = RigidTransform([0.0, 0.0, -0.025])
     if renderer_name is not None:
-        scene_graph.AddRenderer(renderer_name, MakeRenderEngineVtk(RenderEngineVtkParams(default_clear_color=[1.0, 1.0, 1.0])))
+        scene_graph.AddRenderer(renderer_name,
+                                MakeRenderEngineVtk(RenderEngineVtkParams(default_clear_color=[1.0, 1.0, 1.0])))
     plant.RegisterCollisionGeometry(plant.world_body(), X_WTable, Box(0.6, 0.6, 0.05), "table", table_props)
-    plant.RegisterVisualGeometry(plant.world_body(), X_WTable, Box(0.6, 0.6, 0.05), "table", np.array([0.6, 0.5, 0.4, 1]))
+    plant.RegisterVisualGeometry(plant.world_body(), X_WTable, Box(0.6, 0.6, 0.05), "table",
+                                 np.array([0.6, 0.5, 0.4, 1]))
 
     # Free cylinder (axis along world z).
     cyl_instance = plant.AddModelInstance("cylinder")
@@ -175,7 +185,8 @@ def simulate_cylinder_grasp(
     t_end = t_lift1 + params.hold_time
     hand_traj = PiecewisePolynomial.FirstOrderHold(
         [0.0, t_close0, t_close1, t_end],
-        np.column_stack([postures["preshape"], postures["preshape"], postures[params.close_to], postures[params.close_to]]),
+        np.column_stack([postures["preshape"], postures["preshape"], postures[params.close_to],
+                         postures[params.close_to]]),
     )
     lift_traj = PiecewisePolynomial.FirstOrderHold(
         [0.0, t_lift0, t_lift1, t_end], np.array([[h, h, h + params.lift_height, h + params.lift_height]])
@@ -237,7 +248,8 @@ def simulate_cylinder_grasp(
         hand_links_in_contact=hand_touching,
         initial_hand_contacts=initial_hand,
         touches_thumb=any(n in models.THUMB_LINKS for n in hand_touching),
-        touches_fingers=any(n not in models.THUMB_LINKS and n not in ("svh_base_link", "svh_palm_flex_link") for n in hand_touching),
+        touches_fingers=any(n not in models.THUMB_LINKS and n not in ("svh_base_link", "svh_palm_flex_link")
+                            for n in hand_touching),
         touches_table=any(n in ("WorldBody", "world") for n in touching),
         couplers_max_error=float(max(errors)),
         sim_time=t_end,

@@ -148,7 +148,8 @@ def _parse_renamed(parser: Parser, path: Path, robot_name: str, model_name: str)
     return instances[0]
 
 
-def _apply_gains(plant: MultibodyPlant, instance: ModelInstanceIndex, gains: dict[str, tuple[float, float, float]]) -> None:
+def _apply_gains(plant: MultibodyPlant, instance: ModelInstanceIndex,
+                 gains: dict[str, tuple[float, float, float]]) -> None:
     actuator_indices = [JointActuatorIndex(i) for i in range(plant.num_actuators())]
     for joint_name, (kp, kd, effort) in gains.items():
         joint = plant.GetJointByName(joint_name, instance)
@@ -211,7 +212,8 @@ def add_arm_and_hand(plant: MultibodyPlant, parser: Parser | None = None, *,
     hand_body = plant.GetBodyByName(HAND_BASE_LINK, hand)
     _add_adapter_plate(plant, flange)
     plant.WeldFrames(flange, hand_body.body_frame(), X_FLANGE_HAND)
-    return ArmHand(arm=arm, hand=hand, hand_base_body=hand_body, hand_base_frame=hand_body.body_frame(), flange_frame=flange)
+    return ArmHand(arm=arm, hand=hand, hand_base_body=hand_body, hand_base_frame=hand_body.body_frame(),
+                   flange_frame=flange)
 
 
 def _add_adapter_plate(plant: MultibodyPlant, flange) -> None:
@@ -239,7 +241,8 @@ def _hand_joint_table() -> dict[str, dict]:
         table[j.get("name")] = {
             "lower": float(lim.get("lower")),
             "upper": float(lim.get("upper")),
-            "mimic": (mim.get("joint"), float(mim.get("multiplier")), float(mim.get("offset"))) if mim is not None else None,
+            "mimic": ((mim.get("joint"), float(mim.get("multiplier")), float(mim.get("offset")))
+                      if mim is not None else None),
         }
     return table
 

@@ -125,6 +125,14 @@ class StationHandles:
 class BodyPoseSelector(LeafSystem):
     """Picks one body's pose out of the plant's ``body_poses`` output.
 
+    .. pydrake_system::
+
+        name: BodyPoseSelector
+        input_ports:
+        - body_poses
+        output_ports:
+        - X_WB
+
     Input ports:
         body_poses: list of RigidTransform X_WB (MultibodyPlant ``body_poses``).
     Output ports:

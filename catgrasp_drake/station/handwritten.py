@@ -28,8 +28,10 @@ from pathlib import Path
 import numpy as np
 import yaml
 
+from catgrasp_drake.data.dataset import load_annotations
 from catgrasp_drake.errors import InputError, ModelFileError
 from catgrasp_drake.grasping.motion import GraspMotion
+from catgrasp_drake.robot.models import HAND_ACTUATED_JOINTS, load_hand_postures
 
 GRASPS_DIR = Path(__file__).resolve().parents[2] / "models" / "grasps"
 _FIELDS = {"category", "anchor", "grasp", "pregrasp_distance", "postures", "posture_overrides",
@@ -76,14 +78,10 @@ def motion_from_spec(spec: dict, annotations: dict | None = None, postures: dict
     X_pre = X_grasp.copy()
     X_pre[:3, 3] -= float(spec.get("pregrasp_distance", 0.08)) * R[:, 1]
     if postures is None:
-        from catgrasp_drake.robot.models import load_hand_postures
-
         postures = load_hand_postures(spec.get("postures", spec.get("category")))
     postures = {k: np.array(v, float) for k, v in postures.items()}
     overrides = spec.get("posture_overrides") or {}
     if overrides:
-        from catgrasp_drake.robot.models import HAND_ACTUATED_JOINTS
-
         for name, joints in overrides.items():
             if name not in postures:
                 raise InputError(f"{where}.posture_overrides: unknown posture {name!r}")
@@ -97,8 +95,6 @@ def motion_from_spec(spec: dict, annotations: dict | None = None, postures: dict
 
 def load_handwritten_motion(category: str, instance: str, path: str | Path | None = None) -> GraspMotion:
     """The hand-written grasp of ``category`` fitted to ``instance``'s annotations (object frame)."""
-    from catgrasp_drake.data.dataset import load_annotations
-
     path = Path(path) if path is not None else GRASPS_DIR / f"{category}_handwritten.yaml"
     try:
         spec = yaml.safe_load(path.read_text())

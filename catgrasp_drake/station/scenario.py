@@ -52,6 +52,7 @@ import numpy as np
 import yaml
 
 from catgrasp_drake.core.visibility import look_at_matrix
+from catgrasp_drake.data.dataset import CATEGORIES, list_instances, load_annotations, read_annotations
 from catgrasp_drake.errors import InputError, ModelFileError
 
 #: The project's scenario file.
@@ -112,8 +113,6 @@ class ObjectSpec:
 
     def annotations(self) -> dict:
         """The object's annotations (functional regions in its canonical frame); {} for primitives."""
-        from catgrasp_drake.data.dataset import load_annotations, read_annotations
-
         if self.model_dir is not None:
             return read_annotations(Path(self.model_dir) / "annotations.json")
         if self.category is None:
@@ -279,8 +278,6 @@ def _object(value, where: str) -> ObjectSpec:
         return ObjectSpec(None, None, _primitive(d["primitive"], f"{where}.primitive"), xyz, yaw)
     category = d.get("category", ObjectSpec.category)
     instance = d.get("instance", f"{category}_00")
-    from catgrasp_drake.data.dataset import CATEGORIES, list_instances
-
     if category not in CATEGORIES:
         raise InputError(f"{where}.category: unknown category {category!r}; known: {', '.join(CATEGORIES)}")
     if "model_dir" in d:

@@ -13,7 +13,6 @@ and reused by every simulation step.
 
 from __future__ import annotations
 
-import numpy as np
 from pydrake.math import RigidTransform
 
 from catgrasp_drake.category_model import CategoryModel
@@ -33,6 +32,16 @@ def predict_motion_W(model: CategoryModel, x, X_WO, scale: float) -> GraspMotion
 
 class GraspRegressor(GraspPredictor):
     """Predicts the grasping motion for an estimated shape and pose: the ``latent`` :class:`GraspPredictor`.
+
+    .. pydrake_system::
+
+        name: GraspRegressor
+        input_ports:
+        - x
+        - X_WO
+        - scale
+        output_ports:
+        - grasp_motion_W
 
     Input ports:
         x: latent vector (q,) of the category model's shape space.

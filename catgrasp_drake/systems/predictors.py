@@ -22,8 +22,8 @@ from pydrake.systems.framework import LeafSystem
 
 from catgrasp_drake.category_model import CategoryModel
 from catgrasp_drake.errors import CatgraspError, InputError
-from catgrasp_drake.prediction import check_method, predict_motion
 from catgrasp_drake.perception.object_cloud import points_from_cloud
+from catgrasp_drake.prediction import check_method, predict_motion
 
 
 class GraspPredictor(LeafSystem):

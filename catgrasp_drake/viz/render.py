@@ -6,13 +6,14 @@ offscreen. Meshes must be ``.obj`` files with normals.
 
 from __future__ import annotations
 
+import io
 import os
 from pathlib import Path
 from typing import Sequence
 
 import numpy as np
+import trimesh
 from PIL import Image, ImageDraw
-
 from pydrake.geometry import (
     ClippingRange,
     ColorRenderCamera,
@@ -52,8 +53,6 @@ def render_mesh(
     object's +y (functional direction) points right in the image.
     """
     if bounds is None:
-        import trimesh
-
         m = trimesh.load(str(mesh_path), force="mesh")
         bounds = (m.bounds[0], m.bounds[1])
     lo, hi = (np.asarray(b, float) for b in bounds)
@@ -75,7 +74,8 @@ def render_mesh(
     context = scene_graph.CreateDefaultContext()
     query = scene_graph.get_query_output_port().Eval(context)
     w, h = size
-    core = RenderCameraCore(_RENDERER, CameraInfo(w, h, np.radians(fov_y_deg)), ClippingRange(0.01, 10.0), RigidTransform())
+    core = RenderCameraCore(_RENDERER, CameraInfo(w, h, np.radians(fov_y_deg)), ClippingRange(0.01, 10.0),
+                            RigidTransform())
     image = query.RenderColorImage(ColorRenderCamera(core, False), scene_graph.world_frame_id(),
                                      RigidTransform(look_at_matrix(eye, center)))
     return rgb_array(image)
@@ -109,8 +109,6 @@ def contact_sheet(
         x, y = c * w, top + r * (h + 16)
         sheet.paste(Image.fromarray(img), (x, y))
         draw.text((x + 4, y + h + 2), label, fill="black")
-    import io
-
     buf = io.BytesIO()
     sheet.save(buf, format="PNG", optimize=True)
     atomic_write_bytes(path, buf.getvalue())

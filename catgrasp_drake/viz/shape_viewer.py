@@ -42,6 +42,7 @@ from pydrake.systems.framework import DiagramBuilder
 from catgrasp_drake.category_model import CategoryModel
 from catgrasp_drake.errors import InputError
 from catgrasp_drake.grasping.motion import GraspMotion
+from catgrasp_drake.robot import models
 from catgrasp_drake.viz.meshcat_tools import COLORS, draw_cloud, draw_triad, save_static_html, start_meshcat
 
 ROOT = "/view"
@@ -87,8 +88,6 @@ class _HandDrawer:
     """
 
     def __init__(self):
-        from catgrasp_drake.robot import models
-
         self._models = models
         builder = DiagramBuilder()
         plant, scene_graph = AddMultibodyPlantSceneGraph(builder, 0.0)

@@ -93,4 +93,5 @@ def ycb_contact_sheet(root: str | os.PathLike | None, path: str | os.PathLike, *
                     labels.append(f"{label}{tag}" if view == _SHEET_VIEWS[0] else f"az {view[0]:.0f} el {view[1]:.0f}")
                     images.append(img)
     contact_sheet(images, labels, path, columns=4,
-                  title="YCB objects aligned to the canonical frames (left) vs embedded instance (right); +y right; red: functional region")
+                  title="YCB objects aligned to the canonical frames (left) vs embedded instance (right); "
+                        "+y right; red: functional region")

@@ -18,8 +18,8 @@ from catgrasp_drake.benchmark.runner import (
     trial_specs,
 )
 from catgrasp_drake.errors import InputError
-from catgrasp_drake.station.scenario import load_scenario
 from catgrasp_drake.perception.object_cloud import _mask_depth
+from catgrasp_drake.station.scenario import load_scenario
 
 
 def _azimuth_elevation(camera):

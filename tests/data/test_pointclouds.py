@@ -50,7 +50,8 @@ def test_partial_view_sees_only_the_near_side(drill):
     # every point is the first hit along its camera ray (nothing in front of it)
     o3d = import_open3d()
     scene = o3d.t.geometry.RaycastingScene()
-    scene.add_triangles(o3d.core.Tensor(drill.vertices.astype(np.float32)), o3d.core.Tensor(drill.faces.astype(np.uint32)))
+    scene.add_triangles(o3d.core.Tensor(drill.vertices.astype(np.float32)),
+                        o3d.core.Tensor(drill.faces.astype(np.uint32)))
     eye = np.asarray(cam.eye)
     d = view - eye
     r = np.linalg.norm(d, axis=1)

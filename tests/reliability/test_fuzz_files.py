@@ -26,7 +26,8 @@ from .strategies import CORRUPTIONS, MUST_REJECT, clouds, corrupt_bytes, npz_wit
 
 _ASCII_PCD = ("# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH {n}\nHEIGHT 1\n"
               "VIEWPOINT 0 0 0 1 0 0 0\nPOINTS {n}\nDATA ascii\n")
-_ASCII_PLY = "ply\nformat ascii 1.0\nelement vertex {n}\nproperty float x\nproperty float y\nproperty float z\nend_header\n"
+_ASCII_PLY = ("ply\nformat ascii 1.0\nelement vertex {n}\nproperty float x\nproperty float y\nproperty float z\n"
+              "end_header\n")
 
 
 def _npy_bytes(a, **kw) -> bytes:
@@ -88,7 +89,8 @@ def cloud_files(draw, tmp):
         path.write_bytes(b"0 0 0\n")
     elif how.startswith("npy_"):
         path = path.with_suffix(".npy")
-        a = {"npy_pickle": None, "npy_complex": pts + 1j, "npy_structured": np.zeros(5, dtype=[("x", "f8"), ("y", "f8")]),
+        a = {"npy_pickle": None, "npy_complex": pts + 1j,
+             "npy_structured": np.zeros(5, dtype=[("x", "f8"), ("y", "f8")]),
              "npy_strings": np.array([["a", "b", "c"]]), "npy_2d_wrong": pts[:, :2], "npy_scalar": np.float64(1.0),
              "npy_big_endian": pts.astype(">f8"), "npy_fortran": np.asfortranarray(pts),
              "npy_float16": pts.astype(np.float16)}[how]

@@ -87,7 +87,8 @@ def test_infer_latent_pose(small_space, observed, options, init):
 
 
 @scaled(30)
-@given(category=st.sampled_from(["drill", "spray_bottle", "mug"]), observed=clouds(min_n=30, max_n=300, valid_weight=12),
+@given(category=st.sampled_from(["drill", "spray_bottle", "mug"]),
+       observed=clouds(min_n=30, max_n=300, valid_weight=12),
        options=_options.filter(lambda o: "residual_cpd" not in o and "yaw_candidates" not in o),
        init=st.just(("none", None)))
 def test_infer_latent_pose_trained_models(trained_models, category, observed, options, init):

@@ -145,9 +145,9 @@ def test_category_model_transfer(trained_models, data, category):
         "R": choice([R_ok, np.eye(3)], [("nan", np.full((3, 3), np.nan)), ("wrong_shape", np.eye(4)),
                                         ("not_rotation", 2 * np.eye(3)), ("reflection", -np.eye(3)),
                                         ("string", "identity")]),
-        "t": choice([np.zeros(3), np.array([0.5, 0.1, 0.02])], [("nan", np.full(3, np.nan)),
-                                                               ("wrong_shape", np.zeros(2)), ("far_1km", np.full(3, 1e3)),
-                                                               ("huge", np.full(3, 1e300)), ("string", "origin")]),
+        "t": choice([np.zeros(3), np.array([0.5, 0.1, 0.02])],
+                    [("nan", np.full(3, np.nan)), ("wrong_shape", np.zeros(2)), ("far_1km", np.full(3, 1e3)),
+                     ("huge", np.full(3, 1e300)), ("string", "origin")]),
         "s": number(st.floats(0.5, 2.0)),
         "frame": choice(["world", "object"], [("string", "camera"), ("none", None)]),
     }))

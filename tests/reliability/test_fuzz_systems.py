@@ -14,8 +14,8 @@ from pydrake.systems.analysis import Simulator
 from pydrake.systems.sensors import CameraInfo, ImageDepth32F, ImageLabel16I
 
 from catgrasp_drake.grasping.motion import GraspMotion
-from catgrasp_drake.systems.grasp_regressor import GraspRegressor, predict_motion_W
 from catgrasp_drake.perception.object_cloud import CloudCropVoxel, LabelDepthMask, ObjectCloudSystem
+from catgrasp_drake.systems.grasp_regressor import GraspRegressor, predict_motion_W
 from catgrasp_drake.systems.shape_estimator import LatentShapeEstimator, ShapeEstimate, estimate_on_table
 
 from .harness import attempt, check_message, finite_array, rigid_poses
@@ -35,10 +35,11 @@ def _raw_cloud(points) -> PointCloud:
 
 
 _X_WTs = st.sampled_from([("valid", X_WT), ("nan", np.full((4, 4), np.nan)), ("wrong_shape", np.eye(3)),
-                          ("string", "table"), ("scaled", 2 * np.eye(4)), ("far_1km", np.diag([1.0, 1, 1, 1]) +
-                                                                               np.pad(np.full((3, 1), 1e3), ((0, 1), (3, 0)))),
-                          ("rigid_transform", RigidTransform(X_WT)), ("huge", np.pad(np.eye(3), ((0, 1), (0, 1))) +
-                                                                       np.diag([0, 0, 0, 1.0]) + 1e300 * np.eye(4, k=3))])
+                          ("string", "table"), ("scaled", 2 * np.eye(4)),
+                          ("far_1km", np.diag([1.0, 1, 1, 1]) + np.pad(np.full((3, 1), 1e3), ((0, 1), (3, 0)))),
+                          ("rigid_transform", RigidTransform(X_WT)),
+                          ("huge", np.pad(np.eye(3), ((0, 1), (0, 1))) + np.diag([0, 0, 0, 1.0])
+                           + 1e300 * np.eye(4, k=3))])
 
 
 def _check_estimate(q, n_points):

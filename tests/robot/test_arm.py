@@ -17,7 +17,8 @@ from tools import ur10_model
 def station():
     builder = DiagramBuilder()
     plant, scene_graph = AddMultibodyPlant(
-        MultibodyPlantConfig(time_step=5e-3, discrete_contact_approximation="sap", contact_model="hydroelastic_with_fallback"),
+        MultibodyPlantConfig(time_step=5e-3, discrete_contact_approximation="sap",
+                             contact_model="hydroelastic_with_fallback"),
         builder,
     )
     X_W_ArmBase = RigidTransform(RollPitchYaw(0, 0, 0.3), [0.1, -0.2, 0.05])
@@ -47,7 +48,8 @@ def test_arm_and_hand_parse_together(station):
 
 @pytest.mark.parametrize(
     "q",
-    [np.zeros(6), models.ARM_HOME_POSITIONS, np.array([0.3, -1.1, 1.4, -0.7, 0.9, -2.2]), np.array([-2.5, 0.4, -2.9, 3.5, -5.0, 6.0])],
+    [np.zeros(6), models.ARM_HOME_POSITIONS, np.array([0.3, -1.1, 1.4, -0.7, 0.9, -2.2]),
+     np.array([-2.5, 0.4, -2.9, 3.5, -5.0, 6.0])],
 )
 def test_forward_kinematics_matches_dh(station, q):
     _, plant, _, parts, X_W_ArmBase = station
@@ -93,7 +95,8 @@ def test_make_parser_knows_the_package():
 
 
 def test_generator_reproduces_committed_arm_urdf():
-    assert ur10_model.build_urdf() == models.ARM_URDF_PATH.read_text(), "models/ur10/ur10.urdf is stale: rerun python -m tools.ur10_model"
+    assert ur10_model.build_urdf() == models.ARM_URDF_PATH.read_text(), \
+        "models/ur10/ur10.urdf is stale: rerun python -m tools.ur10_model"
 
 
 def test_arm_tracks_a_slow_trajectory_carrying_1_5_kg():
@@ -104,7 +107,8 @@ def test_arm_tracks_a_slow_trajectory_carrying_1_5_kg():
 
     builder = DiagramBuilder()
     plant, _ = AddMultibodyPlant(
-        MultibodyPlantConfig(time_step=5e-3, discrete_contact_approximation="sap", contact_model="hydroelastic_with_fallback"),
+        MultibodyPlantConfig(time_step=5e-3, discrete_contact_approximation="sap",
+                             contact_model="hydroelastic_with_fallback"),
         builder,
     )
     parts = models.add_arm_and_hand(plant)
@@ -113,7 +117,8 @@ def test_arm_tracks_a_slow_trajectory_carrying_1_5_kg():
     plant.Finalize()
     q0 = models.ARM_HOME_POSITIONS
     q1 = q0 + np.array([0.8, 0.3, -0.4, 0.3, 0.5, 0.5])
-    traj = PiecewisePolynomial.CubicWithContinuousSecondDerivatives([0.0, 4.0], np.column_stack([q0, q1]), np.zeros(6), np.zeros(6))
+    traj = PiecewisePolynomial.CubicWithContinuousSecondDerivatives([0.0, 4.0], np.column_stack([q0, q1]),
+                                                                    np.zeros(6), np.zeros(6))
     source = builder.AddSystem(TrajectorySource(traj, output_derivative_order=1))
     builder.Connect(source.get_output_port(), plant.get_desired_state_input_port(parts.arm))
     hand_q = models.load_hand_postures("cylinder")["open"]

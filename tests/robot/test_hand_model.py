@@ -27,7 +27,8 @@ def reference_dir() -> Path:
 def _sap_plant():
     builder = DiagramBuilder()
     plant, scene_graph = AddMultibodyPlant(
-        MultibodyPlantConfig(time_step=5e-3, discrete_contact_approximation="sap", contact_model="hydroelastic_with_fallback"),
+        MultibodyPlantConfig(time_step=5e-3, discrete_contact_approximation="sap",
+                             contact_model="hydroelastic_with_fallback"),
         builder,
     )
     return builder, plant, scene_graph
@@ -145,7 +146,8 @@ def test_kinematics_match_reference_forward_kinematics(reference_dir, hand_plant
 
 def test_generator_reproduces_committed_urdf(reference_dir):
     text, bodies, joints = svh_model.generate(reference_dir)
-    assert text == models.HAND_URDF_PATH.read_text(), "models/svh/svh_right.urdf is stale: rerun python -m tools.svh_model"
+    assert text == models.HAND_URDF_PATH.read_text(), \
+        "models/svh/svh_right.urdf is stale: rerun python -m tools.svh_model"
     assert len(joints) == 20
 
 
@@ -179,7 +181,8 @@ def test_min_enclosing_circle_exact():
 def test_boxes_along_axis_cover_points():
     rng = np.random.default_rng(0)
     # An L-shaped cloud: a wide slab at the bottom and a narrow column on top.
-    pts = np.vstack([rng.uniform([0, 0, 0], [0.06, 0.06, 0.05], (400, 3)), rng.uniform([0, 0, 0.05], [0.06, 0.02, 0.12], (400, 3))])
+    pts = np.vstack([rng.uniform([0, 0, 0], [0.06, 0.06, 0.05], (400, 3)),
+                     rng.uniform([0, 0, 0.05], [0.06, 0.02, 0.12], (400, 3))])
     boxes = fitting.fit_boxes_along_axis(pts)
     assert 2 <= len(boxes) <= 3
     covered = np.zeros(len(pts), bool)

@@ -20,7 +20,8 @@ def test_postures_exist_and_are_within_limits(category):
             assert limits[joint][0] <= value <= limits[joint][1]
     # Closing never opens a finger and flexes the middle and ring fingers further than the preshape
     # (thumb and little finger may keep their preshape, e.g. a tucked thumb).
-    flex = [models.HAND_ACTUATED_JOINTS.index(j) for j in ("svh_thumb_flexion", "svh_middle_proximal", "svh_ring", "svh_pinky")]
+    flex = [models.HAND_ACTUATED_JOINTS.index(j)
+            for j in ("svh_thumb_flexion", "svh_middle_proximal", "svh_ring", "svh_pinky")]
     assert np.all(postures["closed"][flex] >= postures["preshape"][flex])
     wrap = [models.HAND_ACTUATED_JOINTS.index(j) for j in ("svh_middle_proximal", "svh_middle_distal", "svh_ring")]
     assert np.all(postures["closed"][wrap] > postures["preshape"][wrap])
@@ -57,7 +58,8 @@ def test_bad_posture_file_is_reported(tmp_path, monkeypatch):
     try:
         with pytest.raises(ModelFileError, match="missing"):
             models.load_hand_postures("drill")
-        bad.write_text("version: 1\ncategories:\n  drill:\n    open: {" + ", ".join(f"{j}: 5.0" for j in models.HAND_ACTUATED_JOINTS) + "}\n")
+        joints = ", ".join(f"{j}: 5.0" for j in models.HAND_ACTUATED_JOINTS)
+        bad.write_text("version: 1\ncategories:\n  drill:\n    open: {" + joints + "}\n")
         models._postures_file.cache_clear()
         with pytest.raises(ModelFileError, match="outside the joint limits"):
             models.load_hand_postures("drill")

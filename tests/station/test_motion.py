@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 
 import numpy as np
@@ -38,7 +39,7 @@ def test_valid_motion_is_frozen():
     assert m.poses.shape == (2, 4, 4)
     with pytest.raises(ValueError):
         m.poses[0, 0, 3] = 1.0
-    with pytest.raises(Exception):
+    with pytest.raises(dataclasses.FrozenInstanceError):
         m.lift_height = 0.2
     assert m.lift_height >= 0.10 and m.hold_time >= 2.0
     np.testing.assert_allclose(m.pose("grasp")[:3, 3], [0, -0.05, 0.1])

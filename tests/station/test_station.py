@@ -9,16 +9,17 @@ pytest.importorskip("pydrake")
 
 from catgrasp_drake.data.dataset import load_mesh  # noqa: E402
 from catgrasp_drake.data.open3d_import import import_open3d  # noqa: E402
-from catgrasp_drake.station.builder import make_station  # noqa: E402
-from catgrasp_drake.station.handwritten import motion_from_spec  # noqa: E402
-from catgrasp_drake.station.scenario import load_scenario, load_scenarios  # noqa: E402
-from catgrasp_drake.trial import run_grasp_trial  # noqa: E402
+from catgrasp_drake.errors import InputError  # noqa: E402
 from catgrasp_drake.perception.object_cloud import (  # noqa: E402
     _crop_and_voxelize,
     _mask_depth,
     _voxel_downsample,
     points_from_cloud,
 )
+from catgrasp_drake.station.builder import make_station  # noqa: E402
+from catgrasp_drake.station.handwritten import motion_from_spec  # noqa: E402
+from catgrasp_drake.station.scenario import load_scenario, load_scenarios  # noqa: E402
+from catgrasp_drake.trial import run_grasp_trial  # noqa: E402
 
 #: A side power grasp on the 4 cm test cylinder (object frame).
 CYLINDER_GRASP = {"grasp": {"position": [-0.04, 0.135, 0.08], "fingers": [0, -1, 0], "palm": [1, 0, 0]},
@@ -84,7 +85,7 @@ def test_cloud_helpers():
     label = np.array([[5, 4], [5, 5]])
     m = _mask_depth(depth, label, 5)
     assert np.isnan(m[0, 1]) and m[0, 0] == 1.0 and m[1, 0] == 3.0
-    with pytest.raises(Exception):
+    with pytest.raises(InputError):
         _mask_depth(depth, label, 5, noise_std=0.01)  # noise needs an explicit generator
     p = np.array([[0.001, 0.001, 0.001], [0.002, 0.002, 0.002], [0.5, 0.5, 0.5], [np.nan, 0, 0], [2.0, 0, 0]])
     out = _crop_and_voxelize(p, np.zeros(3), np.ones(3), 0.01)

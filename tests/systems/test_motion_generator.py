@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from catgrasp_drake.robot.models import ARM_JOINTS
 from catgrasp_drake.planning.model import make_planning_model
+from catgrasp_drake.robot.models import ARM_JOINTS
 from catgrasp_drake.station.handwritten import load_handwritten_motion
 from catgrasp_drake.station.scenario import load_scenario
 from catgrasp_drake.systems.grasp_execution import MotionPlanner

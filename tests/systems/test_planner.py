@@ -17,8 +17,8 @@ from scipy.spatial.transform import Rotation
 from catgrasp_drake.grasping.motion import GraspMotion
 from catgrasp_drake.grasping.sampling import perturb_poses
 from catgrasp_drake.planning.model import make_planning_model
-from catgrasp_drake.planning.records import PHASES, PlanParams
 from catgrasp_drake.planning.planner import shake_amplitude
+from catgrasp_drake.planning.records import PHASES, PlanParams
 from catgrasp_drake.robot.models import ARM_JOINTS, hand_joint_angles
 from catgrasp_drake.station.handwritten import load_handwritten_motion
 from catgrasp_drake.station.scenario import load_scenario

@@ -9,9 +9,9 @@ from pydrake.math import RigidTransform, RollPitchYaw
 from catgrasp_drake.category_model import CategoryModel
 from catgrasp_drake.demo import default_model_path
 from catgrasp_drake.errors import InputError
+from catgrasp_drake.perception.object_cloud import cloud_from_points
 from catgrasp_drake.prediction import METHODS, predict_motion
 from catgrasp_drake.station.scenario import load_scenario, with_instance
-from catgrasp_drake.perception.object_cloud import cloud_from_points
 from catgrasp_drake.systems.predictors import GraspPredictor
 from catgrasp_drake.transfer import make_transfer_diagram
 

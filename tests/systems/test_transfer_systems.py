@@ -15,10 +15,10 @@ from catgrasp_drake.core.shape_space import build_shape_space
 from catgrasp_drake.core.visibility import camera_on_sphere_position, hidden_point_removal
 from catgrasp_drake.grasping.descriptor import descriptor_vector
 from catgrasp_drake.grasping.motion import GraspMotion
-from catgrasp_drake.systems.grasp_regressor import GraspRegressor, predict_motion_W
 from catgrasp_drake.perception.object_cloud import cloud_from_points, points_from_cloud
-from catgrasp_drake.systems.shape_estimator import LatentShapeEstimator, estimate_on_table
 from catgrasp_drake.systems.grasp_execution import refusal_status
+from catgrasp_drake.systems.grasp_regressor import GraspRegressor, predict_motion_W
+from catgrasp_drake.systems.shape_estimator import LatentShapeEstimator, estimate_on_table
 
 from ..core.test_synthetic_shapes import family
 
