@@ -116,3 +116,29 @@ def test_no_private_names_imported_across_modules():
             if unit_of(target) is not None and target != _module_name(path):
                 found += [f"{path.relative_to(REPO)}:{line}: {target}.{n}" for n in names if n.startswith("_")]
     assert not found, "private names imported from other modules:\n" + "\n".join(found)
+
+
+def test_no_import_cycle_between_modules():
+    """Not even inside one unit (the layer order covers the units), counting imports inside functions."""
+    modules = {_module_name(p): p for p in PACKAGE_DIR.rglob("*.py")}
+    graph = {m: set() for m in modules}
+    for m, path in modules.items():
+        for _, target, names in _imports(path):
+            for t in [target] + [f"{target}.{n}" for n in names]:
+                if t in modules and t != m:
+                    graph[m].add(t)
+    state, cycles = {}, []
+
+    def visit(m, stack):
+        state[m] = "open"
+        for t in sorted(graph[m]):
+            if state.get(t) == "open":
+                cycles.append(" -> ".join(stack[stack.index(t):] + [t]))
+            elif t not in state:
+                visit(t, stack + [t])
+        state[m] = "done"
+
+    for m in sorted(modules):
+        if m not in state:
+            visit(m, [m])
+    assert not cycles, "import cycles:\n" + "\n".join(cycles)
