@@ -38,6 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
+from catgrasp_drake.core.fileio import atomic_write_text
 from catgrasp_drake.errors import InputError
 
 #: The test split's data-set seed. Fixed; nothing (grasps, kernels, thresholds) is chosen on it.
@@ -131,7 +132,7 @@ def ensure_test_split(data_dir: str | Path) -> Path:
     if not marker.is_file():
         generate_dataset(root, seed=TEST_SEED)
         total = sum(INSTANCE_COUNTS.values())
-        marker.write_text(f"seed {TEST_SEED}, {total} instances\n")
+        atomic_write_text(marker, f"seed {TEST_SEED}, {total} instances\n")
     return root
 
 
