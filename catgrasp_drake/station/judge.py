@@ -40,7 +40,8 @@ Rules (first failing rule names ``failure_reason``):
    - no hand contact: ``dropped`` if lifted, else ``not_lifted``;
    - hand and table contact: ``slipped`` if lifted, else ``not_lifted``;
    - anything else but the hand (e.g. the arm): ``touched_other``;
-   - not lifted (held, off the table, but risen < 10 cm): ``not_lifted``;
+   - held, off the table, risen by 2-10 cm (it turned or slid in the hand
+     during the lift): ``lifted_short``; less: ``not_lifted``;
    - moved in the hand beyond the tolerances during the hold: ``slipped``.
 3. Disturbance, at ``after_shake``: no hand contact (dropped during the
    shake), back on the table, or moved in the hand beyond the tolerances:
@@ -399,8 +400,11 @@ def judge(spec: JudgeSpec, initial: Snapshot, before_close: Snapshot, after_lift
     others = sorted(partners - {spec.hand_model})
     if others:
         return verdict(False, False, "touched_other", f"object touches {', '.join(others)} during the hold")
-    if not lifted:
+    if not lifted and rise_lift <= 0.02:
         return verdict(False, False, "not_lifted", rise_text)
+    if not lifted:
+        return verdict(False, False, "lifted_short", f"{rise_text}; held off the table, tilted "
+                       f"{tilt_deg(initial.X_WO, after_lift.X_WO):.0f} deg during the lift")
     why = loose("hold")
     if why:
         return verdict(False, False, "slipped", why)
