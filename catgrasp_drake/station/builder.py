@@ -210,7 +210,8 @@ def _add_object(plant: MultibodyPlant, parser, scenario: Scenario) -> ModelInsta
 
 
 def _apply_physics_knobs(plant: MultibodyPlant, scene_graph: SceneGraph, scenario: Scenario, hand, obj) -> None:
-    """``PlantSpec.hand_effort_scale`` (hand effort limits scaled) and ``object_friction`` (replaced)."""
+    """``PlantSpec.hand_effort_scale`` (hand effort limits scaled), ``object_friction`` and
+    ``hand_resolution_hint`` (replaced)."""
     p = scenario.plant
     if p.hand_effort_scale != 1.0:
         for i in range(plant.num_actuators()):  # (GetJointActuatorIndices is empty before Finalize)
@@ -225,6 +226,14 @@ def _apply_physics_knobs(plant: MultibodyPlant, scene_graph: SceneGraph, scenari
                 props.UpdateProperty("material", "coulomb_friction",
                                      CoulombFriction(p.object_friction, p.object_friction))
                 scene_graph.AssignRole(plant.get_source_id(), gid, props, RoleAssign.kReplace)
+    if p.hand_resolution_hint is not None:
+        inspector = scene_graph.model_inspector()
+        for body_index in plant.GetBodyIndices(hand):
+            for gid in plant.GetCollisionGeometriesForBody(plant.get_body(body_index)):
+                props = ProximityProperties(inspector.GetProximityProperties(gid))
+                if props.HasProperty("hydroelastic", "resolution_hint"):
+                    props.UpdateProperty("hydroelastic", "resolution_hint", float(p.hand_resolution_hint))
+                    scene_graph.AssignRole(plant.get_source_id(), gid, props, RoleAssign.kReplace)
 
 
 def _camera_models(spec: CameraSpec) -> tuple[ColorRenderCamera, DepthRenderCamera]:

@@ -181,6 +181,9 @@ class PlantSpec:
     #: this factor (1/1.7: the real SVH's), and the object's Coulomb friction replaced (None: its SDF's).
     hand_effort_scale: float = 1.0
     object_friction: float | None = None
+    #: Speed lever (issue 17): the hand's compliant-hydroelastic mesh resolution hint (m) replaced
+    #: (None: the model's 6 mm); coarser tessellations mean fewer contact polygons for SAP.
+    hand_resolution_hint: float | None = None
 
 
 #: UR10 home configuration (rad): the robot model's home turned by pi about the base so the
@@ -367,6 +370,8 @@ def _plant(value, where: str) -> PlantSpec:
                                positive=True),
         object_friction=None if d.get("object_friction") is None else _num(
             d["object_friction"], f"{where}.object_friction", positive=True),
+        hand_resolution_hint=None if d.get("hand_resolution_hint") is None else _num(
+            d["hand_resolution_hint"], f"{where}.hand_resolution_hint", positive=True),
     )
 
 

@@ -1,0 +1,37 @@
+"""The plant's sensitivity and speed knobs reach the geometry they name (and only it)."""
+
+from __future__ import annotations
+
+import dataclasses
+
+from pydrake.systems.framework import DiagramBuilder
+
+from catgrasp_drake.station.builder import add_station
+from catgrasp_drake.station.scenario import load_scenario, scenario_from_dict
+
+
+def _hints(h, instance):
+    inspector = h.scene_graph.model_inspector()
+    out = set()
+    for b in h.plant.GetBodyIndices(instance):
+        for g in h.plant.GetCollisionGeometriesForBody(h.plant.get_body(b)):
+            props = inspector.GetProximityProperties(g)
+            if props.HasProperty("hydroelastic", "resolution_hint"):
+                out.add(round(props.GetProperty("hydroelastic", "resolution_hint"), 6))
+    return out
+
+
+def test_hand_resolution_hint_replaces_the_hand_capsules_hint_only():
+    base = load_scenario("drill_default")
+    h0 = add_station(DiagramBuilder(), base)
+    assert _hints(h0, h0.hand) == {0.006}
+    coarse = base.replace(plant=dataclasses.replace(base.plant, hand_resolution_hint=0.01))
+    h1 = add_station(DiagramBuilder(), coarse)
+    assert _hints(h1, h1.hand) == {0.01}
+    assert _hints(h1, h1.table) == _hints(h0, h0.table)  # the table keeps its own
+
+
+def test_knobs_parse_from_yaml():
+    s = scenario_from_dict("x", {"plant": {"hand_resolution_hint": 0.012, "object_friction": 0.5,
+                                           "hand_effort_scale": 0.6}})
+    assert (s.plant.hand_resolution_hint, s.plant.object_friction, s.plant.hand_effort_scale) == (0.012, 0.5, 0.6)
