@@ -199,11 +199,24 @@ def _pct(x: float) -> str:
     return f"{100.0 * x + 0.0:.0f}"  # + 0.0: no "-0"
 
 
+def _single_instance(instances, strata=None) -> bool:
+    """Whether some stratum (or the whole set) holds fewer than 2 instances: no interval can be given."""
+    inst = np.asarray(list(instances), dtype=object)
+    groups = np.asarray(list(strata), dtype=object) if strata is not None else np.zeros(len(inst), dtype=object)
+    return any(len(set(inst[groups == g])) < 2 for g in set(groups))
+
+
 def _rate(instances, successes, strata=None) -> str:
-    """``k/n (p %) [lo–hi %]`` with the instance bootstrap interval; an em dash for no trials."""
+    """``k/n (p %) [lo–hi %]`` with the instance bootstrap interval; an em dash for no trials.
+
+    With fewer than 2 instances (in some stratum) an instance bootstrap has nothing to resample:
+    the interval is replaced by "[1 instance]" rather than a degenerate [p–p %].
+    """
     s = np.asarray(successes, dtype=bool)
     if len(s) == 0:
         return "—"
+    if _single_instance(instances, strata):
+        return f"{int(s.sum())}/{len(s)} ({_pct(s.mean())} %) [1 instance]"
     p, lo, hi = bootstrap_rate(instances, s, strata=strata, n_boot=N_BOOT, seed=SEED, level=LEVEL)
     return f"{int(s.sum())}/{len(s)} ({_pct(p)} %) [{_pct(lo)}–{_pct(hi)} %]"
 
@@ -297,14 +310,17 @@ def _difference_rows(records: Sequence[dict]) -> list[list[str]]:
                 if not len(pairs):
                     continue
                 a, b = pairs.outcomes("functional")
-                d = paired_bootstrap(pairs.field("instance"), a, b,
-                                     strata=pairs.field("category") if len(cats) > 1 else None,
+                strata = pairs.field("category") if len(cats) > 1 else None
+                d = paired_bootstrap(pairs.field("instance"), a, b, strata=strata,
                                      n_boot=N_BOOT, seed=SEED, level=LEVEL)
+                if _single_instance(pairs.field("instance"), strata):
+                    interval, excludes, frac = f"{_pp(d.diff)} pp [1 instance]", "—", "—"
+                else:
+                    interval = f"{_pp(d.diff)} pp [{_pp(d.low)}, {_pp(d.high)}]"
+                    excludes, frac = ("yes" if d.excludes_zero else "no"), f"{d.frac_le_zero:.3f}"
                 rows.append([name, f"{view}", _label(method), str(len(pairs)),
                              f"{int(a.sum())}/{len(a)} ({_pct(d.rate_a)} %)",
-                             f"{int(b.sum())}/{len(b)} ({_pct(d.rate_b)} %)",
-                             f"{_pp(d.diff)} pp [{_pp(d.low)}, {_pp(d.high)}]",
-                             "yes" if d.excludes_zero else "no", f"{d.frac_le_zero:.3f}"])
+                             f"{int(b.sum())}/{len(b)} ({_pct(d.rate_b)} %)", interval, excludes, frac])
     return rows
 
 

@@ -273,3 +273,12 @@ def test_the_same_trial_twice_is_refused_but_another_seed_is_another_trial(recor
     text = benchmark_tables(records + reseeded)
     assert f"| all | all | {2 * len(records)} |" in text
     assert "| drill | single | rigid | 24 |" in text  # paired within each seed: 12 trials x 2 seeds
+
+
+def test_one_instance_gets_no_interval():
+    from catgrasp_drake.benchmark.report import _rate
+
+    assert _rate(["ycb_035"] * 6, [1, 0, 0, 0, 0, 0]) == "1/6 (17 %) [1 instance]"
+    assert _rate(["a", "a", "b", "b"], [1, 1, 0, 0]).startswith("2/4 (50 %) [0–100 %]")
+    # pooled over categories: one instance per stratum is still one instance to resample in each
+    assert _rate(["d", "s"], [1, 0], strata=["drill", "spray"]).endswith("[1 instance]")
