@@ -103,9 +103,11 @@ def run_demo(args) -> int:
     _stage("regress", t["regress"], "grasp motion predicted, warped by W(x), placed in W")
     _stage("plan", t["plan"], f"IK plan: {result.plan_status}")
     if "execute" in t:
-        _stage("execute", t["execute"], f"{t['simulated_s']:.2f} s simulated (approach, reach, close, lift, hold)")
+        _stage("execute", t["execute"],
+               f"{t['simulated_s']:.2f} s simulated (approach, reach, close, lift, hold, shake, press)")
     verdict = (result.plan_status if result.failure_reason == "refused" else
-               "FUNCTIONAL GRASP (held, index finger on the trigger)" if result.functional_success and
+               f"FUNCTIONAL GRASP (held through the shake, index finger pressing the trigger with "
+               f"{result.judge.get('trigger_force_N', float('nan')):.0f} N)" if result.functional_success and
                model.category != "mug" else "FUNCTIONAL GRASP" if result.functional_success else
                f"grasped, not functional: {result.failure_reason} ({result.detail})" if result.grasp_success else
                f"failed: {result.failure_reason} ({result.detail})")
