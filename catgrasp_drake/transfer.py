@@ -32,13 +32,12 @@ from pydrake.geometry import Meshcat, Rgba
 from pydrake.perception import Concatenate, PointCloud
 from pydrake.systems.analysis import InitializeParams
 from pydrake.systems.framework import DiagramBuilder, EventStatus, LeafSystem
-from pydrake.systems.primitives import ConstantValueSource
 
 from catgrasp_drake.category_model import CategoryModel
 from catgrasp_drake.core.visibility import camera_on_sphere_position
 from catgrasp_drake.data.dataset import instance_mesh_path
 from catgrasp_drake.errors import InputError
-from catgrasp_drake.perception.object_cloud import cloud_from_points, points_from_cloud
+from catgrasp_drake.perception.object_cloud import points_from_cloud
 from catgrasp_drake.planning.model import make_planning_model
 from catgrasp_drake.planning.records import PlanParams, hold_plan
 from catgrasp_drake.prediction import ESTIMATORS, check_method, rigid_space
@@ -249,17 +248,19 @@ def make_transfer_diagram(scenario: Scenario, model: CategoryModel, meshcat: Mes
         builder.Connect(estimator.GetOutputPort("observed_cloud_W"), regressor.GetInputPort("observed_cloud_W"))
         builder.Connect(estimator.GetOutputPort("completed_cloud_W"), regressor.GetInputPort("completed_cloud_W"))
     planning = make_planning_model(scenario)
-    generator = builder.AddNamedSystem("grasp_trajectory", MotionPlanner(
-        h.plant, h.arm, h.hand, planning, obstacle_model=functools.partial(make_planning_model, scenario),
-        params=params, min_confidence=min_confidence))
+    if method == "true_object":
+        # the true object is known before the simulation starts: it is part of the planning model, not an
+        # input port (a constant source's port would be re-evaluated, and the plan re-made, at every step)
+        generator = builder.AddNamedSystem("grasp_trajectory", MotionPlanner(
+            h.plant, h.arm, h.hand, make_planning_model(scenario, true_object_points_W(scenario)),
+            params=params, min_confidence=min_confidence))
+    else:
+        generator = builder.AddNamedSystem("grasp_trajectory", MotionPlanner(
+            h.plant, h.arm, h.hand, planning, obstacle_model=functools.partial(make_planning_model, scenario),
+            params=params, min_confidence=min_confidence))
+        builder.Connect(estimator.GetOutputPort("completed_cloud_W"), generator.GetInputPort("object_cloud_W"))
     builder.Connect(regressor.GetOutputPort("grasp_motion_W"), generator.GetInputPort("grasp_motion_W"))
     builder.Connect(estimator.GetOutputPort("confidence"), generator.GetInputPort("confidence"))
-    if method == "true_object":
-        truth = builder.AddNamedSystem("true_object_cloud", ConstantValueSource(
-            AbstractValue.Make(cloud_from_points(true_object_points_W(scenario)))))
-        builder.Connect(truth.get_output_port(), generator.GetInputPort("object_cloud_W"))
-    else:
-        builder.Connect(estimator.GetOutputPort("completed_cloud_W"), generator.GetInputPort("object_cloud_W"))
     builder.Connect(generator.GetOutputPort("arm_desired_state"), h.plant.get_desired_state_input_port(h.arm))
     builder.Connect(generator.GetOutputPort("hand_desired_state"), h.plant.get_desired_state_input_port(h.hand))
     if meshcat is not None:

@@ -98,11 +98,12 @@ def test_every_method_builds_the_transfer_diagram_with_its_own_estimator(drill):
 
 
 def test_the_plan_is_made_once_for_every_method_while_the_simulation_steps(drill):
-    """Moving the object (what the camera sees) after the estimate must not re-run prediction or planning."""
+    """Moving the object (what the camera sees) and time passing after the estimate must not re-run
+    prediction or planning."""
     from catgrasp_drake.transfer import run_transfer  # noqa: F401  (the diagram is the product's)
 
     scenario = with_instance(load_scenario("drill_default"), "drill_12")
-    for method in ("latent", "cpd"):
+    for method in ("latent", "cpd", "true_object"):
         td = make_transfer_diagram(scenario, drill, method=method)
         ctx = td.diagram.CreateDefaultContext()
         est_ctx = td.estimator.GetMyMutableContextFromRoot(ctx)
@@ -113,5 +114,6 @@ def test_the_plan_is_made_once_for_every_method_while_the_simulation_steps(drill
         X = td.station.plant.GetFreeBodyPose(plant_ctx, td.station.object_body)
         td.station.plant.SetFreeBodyPose(plant_ctx, td.station.object_body,
                                          RigidTransform(X.rotation(), X.translation() + [0.0, 0.05, 0.0]))
+        ctx.SetTime(1.0)  # and time passes, as in the simulation
         again = td.generator.GetOutputPort("plan").Eval(gen_ctx)
         assert again is plan, f"{method}: the plan was recomputed after the scene changed"
