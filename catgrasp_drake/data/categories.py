@@ -26,6 +26,11 @@ from catgrasp_drake.errors import InputError
 #: are hollow shells; these effective densities give realistic masses
 #: (drill ~1.0-1.8 kg, spray bottle ~0.3-0.7 kg when partly filled, mug ~0.3 kg).
 DENSITY_KG_M3 = {"drill": 1300.0, "spray_bottle": 500.0, "mug": 1900.0}
+#: How much each functional region's box is grown around the part itself (m): the annotated box is
+#: the part's bounding box plus this margin (read by the judge as the region's ``grown_by``).
+REGION_MARGIN_M = {"trigger": 0.004, "handle": 0.003}
+#: The functional region of each category.
+FUNCTIONAL_REGION = {"drill": "trigger", "spray_bottle": "trigger", "mug": "handle"}
 
 
 @dataclass(frozen=True)
@@ -116,7 +121,7 @@ def build_drill(p: dict[str, float]) -> GeneratedInstance:
     solid = solid.translate((0.0, 0.0, shift))
     t_lo[2] += shift
     t_hi[2] += shift
-    regions = {"trigger": _box_region([t_lo[0], y_front_handle, t_lo[2]], t_hi, margin=0.004)}
+    regions = {"trigger": _box_region([t_lo[0], y_front_handle, t_lo[2]], t_hi, margin=REGION_MARGIN_M["trigger"])}
     return GeneratedInstance("drill", shapes.to_trimesh(solid), regions, p)
 
 
@@ -192,7 +197,7 @@ def build_spray_bottle(p: dict[str, float]) -> GeneratedInstance:
     hi[2] = z0  # only the part below the head is reachable
     lo[2] += shift
     hi[2] += shift
-    regions = {"trigger": _box_region(lo, hi, margin=0.004)}
+    regions = {"trigger": _box_region(lo, hi, margin=REGION_MARGIN_M["trigger"])}
     return GeneratedInstance("spray_bottle", shapes.to_trimesh(solid), regions, p)
 
 
@@ -237,7 +242,7 @@ def build_mug(p: dict[str, float]) -> GeneratedInstance:
     (xmin, ymin, zmin, xmax, ymax, zmax) = handle.bounding_box()
     lo = np.array([xmin, max(ymin, r_at), zmin])
     hi = np.array([xmax, ymax, zmax])
-    regions = {"handle": _box_region(lo, hi, margin=0.003)}
+    regions = {"handle": _box_region(lo, hi, margin=REGION_MARGIN_M["handle"])}
     return GeneratedInstance("mug", shapes.to_trimesh(solid), regions, p)
 
 

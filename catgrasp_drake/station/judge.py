@@ -87,13 +87,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from catgrasp_drake.data.categories import REGION_MARGIN_M
 from catgrasp_drake.errors import InputError
 
 #: How much the annotated boxes were grown around the part itself (m), per region name, when the
 #: region has no ``"grown_by"`` key: the generated instances' trigger box is the trigger's bounding
 #: box grown by 4 mm and the mug handle's by 3 mm (``catgrasp_drake.data.categories._box_region``).
 #: Other region names: 0 (the box is the part's own bounding box).
-DEFAULT_GROWN_BY: dict[str, float] = {"trigger": 0.004, "handle": 0.003}
+DEFAULT_GROWN_BY: dict[str, float] = dict(REGION_MARGIN_M)
 #: Direction (object frame) in which the trigger is pressed, when the region has no ``"travel_O"`` key.
 DEFAULT_TRAVEL_O = (0.0, -1.0, 0.0)
 
