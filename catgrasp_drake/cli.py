@@ -222,6 +222,9 @@ def _cmd_evaluate(args) -> int:
 def _default_records_path(config) -> Path:
     from catgrasp_drake.benchmark.runner import CATEGORIES
 
+    if config.split == "objects":  # the user's own objects: not the committed tables' records
+        return Path("out/benchmark") / ("objects" + ("_" + "+".join(config.views) if tuple(config.views) != ("single",)
+                                                     else "") + ".jsonl")
     parts = [config.split]
     if config.split != "smoke" and tuple(config.categories) != CATEGORIES:
         parts.append("+".join(config.categories))
@@ -236,8 +239,12 @@ def _cmd_benchmark(args) -> int:
     from catgrasp_drake.benchmark.report import summary_table, write_benchmark_records
     from catgrasp_drake.benchmark.runner import BenchmarkConfig, run_benchmark, trial_specs
 
+    split = args.split or ("objects" if args.objects else "test")
+    if args.objects and split != "objects":
+        raise InputError(f"--objects: the imported objects are the split 'objects', not {split!r}")
     config = BenchmarkConfig(
-        split=args.split, categories=tuple(args.categories), methods=tuple(args.methods), views=tuple(args.views),
+        split=split, objects=tuple(args.objects or ()), categories=tuple(args.categories), methods=tuple(args.methods),
+        views=tuple(args.views),
         placements=args.placements, instances_per_category=args.instances_per_category,
         instances=tuple(args.instances) if args.instances else None, seed=args.seed, noise=not args.no_noise,
         physics=args.physics, min_confidence=args.min_confidence, data_dir=args.data, cache_dir=args.cache,
@@ -287,6 +294,65 @@ def _cmd_demo(args) -> int:
     from catgrasp_drake.demo import run_demo
 
     return run_demo(args)
+
+
+def _cmd_import_object(args) -> int:
+    from catgrasp_drake.data.dataset import CATEGORIES
+    from catgrasp_drake.data.importer import LOW_CONFIDENCE, import_object, parse_transform
+    from catgrasp_drake.errors import ModelFileError
+
+    if args.category not in CATEGORIES:
+        raise InputError(f"--category: unknown category {args.category!r}; known: {', '.join(CATEGORIES)}")
+    transform = parse_transform(args.transform) if args.transform is not None else None
+    region = None
+    if args.region is not None:
+        name, *xyz = args.region
+        try:
+            point = [float(v) for v in xyz]
+        except ValueError:
+            point = [math.nan]
+        if not all(math.isfinite(v) for v in point):
+            raise InputError(f"--region: expected NAME X Y Z (metres, the file's frame), got {' '.join(args.region)!r}")
+        region = (name, point)
+    model = None
+    if transform is None or region is None:  # the automatic alignment or the region transfer needs the model
+        from catgrasp_drake.category_model import CategoryModel
+        from catgrasp_drake.demo import default_model_path
+
+        path = Path(args.model) if args.model else default_model_path(args.category)
+        if not path.is_file():
+            raise ModelFileError(f"{path}: no trained {args.category} model; run 'catgrasp train {args.category}' "
+                                 "or pass --model")
+        model = CategoryModel.load(path, category=args.category)
+    t0 = time.perf_counter()
+    imported = import_object(args.path, args.category, model=model, mass_kg=args.mass, region=region,
+                             transform=transform, out=args.out, name=args.name)
+    t_import = time.perf_counter() - t0
+    rec, fit = imported.record, imported.alignment.fit
+    tf = rec["transform"]
+    rpy, xyz = " ".join(f"{v:.3f}" for v in tf["rpy_deg"]), " ".join(f"{v:.5f}" for v in tf["xyz_m"])
+    how = (f"automatic (fit confidence {fit['confidence']:.2f}, scale {fit['scale']:.3f}, {fit['starts']} starts, "
+           f"{fit['seconds']:.1f} s)" if tf["automatic"] else "stated (--transform)")
+    print(f"{imported.name}: {rec['source'].get('kind', 'mesh')} {args.path} -> {imported.category}")
+    print(f"  alignment  {how}: rpy {rpy} deg, xyz {xyz} m (canonical <- file; --transform \"{rpy} {xyz}\" "
+          "repeats it)")
+    for name, r in imported.regions.items():
+        print(f"  region     {name}: centre {' '.join(f'{v:.3f}' for v in r['center'])} m, half-extents "
+              f"{' '.join(f'{v:.3f}' for v in r['half_extents'])} m ({rec['region_source']})")
+    if not imported.regions:
+        print("  region     none")
+    print(f"  mass       {imported.mass_kg:.3f} kg ({rec['mass_source']}); collision mesh: {rec['collision_mesh']}")
+    t0 = time.perf_counter()
+    from catgrasp_drake.viz.sheets import import_sheet
+
+    png = import_sheet(imported.directory)
+    print(f"wrote {imported.directory}/ ({imported.name}.obj, {imported.name}.sdf, annotations.json) and {png} "
+          f"in {t_import + time.perf_counter() - t0:.1f} s")
+    if imported.confidence is not None and imported.confidence < LOW_CONFIDENCE:
+        print(f"warning: the fit's confidence {imported.confidence:.2f} is below {LOW_CONFIDENCE}: check {png} "
+              "and pass --transform if the alignment is wrong", file=sys.stderr)
+    print(f"use it: catgrasp demo --object {imported.directory}")
+    return 0
 
 
 def _cmd_view(args) -> int:
@@ -382,8 +448,12 @@ def build_parser() -> argparse.ArgumentParser:
 
     b = sub.add_parser("benchmark", help="the project's measure: held-out objects, every method through the "
                        "transfer diagram, varied placements, the strict judge, intervals")
-    b.add_argument("--split", choices=("test", "ycb", "smoke"), default="test",
-                   help="test: generated from the fixed test seed; ycb: real scans (extra .[ycb]); smoke: 2 drills")
+    b.add_argument("--split", choices=("test", "ycb", "smoke", "objects"), default=None,
+                   help="test (default): generated from the fixed test seed; ycb: real scans (extra .[ycb]); "
+                        "smoke: 2 drills; objects: the --objects")
+    b.add_argument("--objects", nargs="+", metavar="DIR", default=None,
+                   help="imported objects' directories (catgrasp import-object): the split 'objects'; records go "
+                        "to out/benchmark/objects.jsonl")
     b.add_argument("--categories", nargs="+", default=["drill", "spray_bottle", "mug"],
                    choices=["drill", "spray_bottle", "mug"])
     b.add_argument("--methods", nargs="+", default=["latent", "paper", "nearest", "rigid", "cpd"],
@@ -414,8 +484,10 @@ def build_parser() -> argparse.ArgumentParser:
     r.set_defaults(func=_cmd_report)
 
     d = sub.add_parser("demo", help="the main job on the embedded default data")
-    d.add_argument("--category", default="drill", help="drill, spray_bottle or mug")
+    d.add_argument("--category", default=None, help="drill, spray_bottle or mug (default: drill, or the --object's)")
     d.add_argument("--instance", default=None, help="object instance (default: the last one the model never saw)")
+    d.add_argument("--object", default=None, metavar="DIR",
+                   help="an imported object's directory (catgrasp import-object) instead of an embedded instance")
     d.add_argument("--seed", type=_int_at_least(0, MAX_SEED), default=0, help="seed of the object's random placement")
     d.add_argument("--view", choices=("single", "full"), default="single",
                    help="one depth camera, or four around the object")
@@ -425,6 +497,25 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("--no-meshcat", action="store_true", help="no Meshcat server and no HTML recording")
     d.add_argument("--out", default="out/demo")
     d.set_defaults(func=_cmd_demo)
+
+    i = sub.add_parser("import-object", help="import your own mesh or point cloud as an instance of a category "
+                       "(aligned, region transferred, mass estimated; docs/import.md)")
+    i.add_argument("path", metavar="MESH_OR_CLOUD",
+                   help=".obj/.stl/.ply/.off mesh or .pcd/.ply/.npy point cloud, metres")
+    i.add_argument("--category", required=True, help="drill, spray_bottle or mug")
+    i.add_argument("--mass", type=_float_in(0.0, open_low=True), default=None, metavar="KG",
+                   help="the object's mass (default: the category's density times the mesh's volume)")
+    i.add_argument("--region", nargs=4, metavar=("NAME", "X", "Y", "Z"), default=None,
+                   help="a point of the functional part (trigger or handle) in the file's frame, metres "
+                        "(default: transferred from the category's canonical instance by the fit)")
+    i.add_argument("--transform", default=None, metavar='"RX RY RZ X Y Z"',
+                   help="the alignment, stated: roll pitch yaw (deg) and x y z (m), canonical <- file "
+                        "(default: automatic)")
+    i.add_argument("--name", default=None, help="instance name (default: from the file name)")
+    i.add_argument("--model", default=None, help="category model file (default: models/trained/<category>.npz)")
+    i.add_argument("--out", default=None, metavar="DIR",
+                   help="output directory (default: out/objects/<category>/<name>)")
+    i.set_defaults(func=_cmd_import_object)
 
     v = sub.add_parser("view", help="inspect a trained model's latent shape space in Meshcat (sliders)")
     v.add_argument("category")

@@ -24,7 +24,7 @@ from PIL import Image
 from catgrasp_drake.category_model import CategoryModel
 from catgrasp_drake.core.fileio import atomic_write_bytes, atomic_write_text
 from catgrasp_drake.core.rotations import rotation_angle
-from catgrasp_drake.data.dataset import CATEGORIES, list_instances, models_dir
+from catgrasp_drake.data.dataset import CATEGORIES, list_instances, models_dir, read_annotations
 from catgrasp_drake.errors import InputError, ModelFileError
 from catgrasp_drake.station.scenario import load_scenario, random_placement, with_instance
 from catgrasp_drake.transfer import make_transfer_diagram, run_transfer
@@ -63,25 +63,55 @@ def _snapshot_png(td, context, path: Path) -> None:
     atomic_write_bytes(path, buf.getvalue())
 
 
+def imported_object(directory) -> tuple[str, str]:
+    """``(category, instance)`` of an imported object's directory (``catgrasp import-object``), checked."""
+    directory = Path(directory)
+    if not directory.is_dir():
+        raise ModelFileError(f"{directory}: no such object directory (write one with 'catgrasp import-object')")
+    ann = read_annotations(directory / "annotations.json")
+    category, instance = ann.get("category"), ann.get("instance")
+    if category not in CATEGORIES or not isinstance(instance, str):
+        raise ModelFileError(f"{directory}/annotations.json: no known category and instance name")
+    if not (directory / f"{instance}.sdf").is_file():
+        raise ModelFileError(f"{directory}: {instance}.sdf is missing")
+    return category, instance
+
+
 def run_demo(args) -> int:
     t_start = time.perf_counter()
     out = Path(args.out)
-    if args.model is None and args.category not in CATEGORIES:
-        raise InputError(f"unknown category {args.category!r}; known: {', '.join(CATEGORIES)}")
+    category = args.category
+    object_dir = getattr(args, "object", None)
+    if object_dir is not None:
+        if args.instance is not None:
+            raise InputError("--instance and --object: give one object, not both")
+        obj_category, obj_instance = imported_object(object_dir)
+        if category is not None and category != obj_category:
+            raise InputError(f"--category {category} but the --object is a {obj_category}")
+        category = obj_category
+    category = category or "drill"
+    if args.model is None and category not in CATEGORIES:
+        raise InputError(f"unknown category {category!r}; known: {', '.join(CATEGORIES)}")
     if not 0.0 <= args.min_confidence <= 1.0:
         raise InputError(f"--min-confidence: expected a value in [0, 1], got {args.min_confidence}")
-    path = Path(args.model) if args.model else default_model_path(args.category)
+    path = Path(args.model) if args.model else default_model_path(category)
     if not path.is_file():
-        raise ModelFileError(f"{path}: no trained {args.category} model; run 'catgrasp train {args.category}' "
+        raise ModelFileError(f"{path}: no trained {category} model; run 'catgrasp train {category}' "
                              "or pass --model")
     t0 = time.perf_counter()
-    model = CategoryModel.load(path, category=args.category)
+    model = CategoryModel.load(path, category=category)
     _stage("model", time.perf_counter() - t0, f"{model.category}: q = {model.space.q} latent dimensions, trained on "
            f"{len(model.instances)} instances ({path})")
 
-    instance = pick_novel_instance(model, args.instance)
-    novel = "never seen in training" if instance not in model.instances else "a TRAINING instance"
-    scenario = random_placement(with_instance(load_scenario(f"{model.category}_default"), instance), args.seed)
+    base = load_scenario(f"{model.category}_default")
+    if object_dir is not None:
+        instance, novel = obj_instance, f"imported from {object_dir}"
+        scenario = random_placement(with_instance(base, instance, model.category, model_dir=str(object_dir)),
+                                    args.seed)
+    else:
+        instance = pick_novel_instance(model, args.instance)
+        novel = "never seen in training" if instance not in model.instances else "a TRAINING instance"
+        scenario = random_placement(with_instance(base, instance), args.seed)
     o = scenario.object
     meshcat = None if args.no_meshcat else start_meshcat()
     t0 = time.perf_counter()

@@ -10,6 +10,8 @@ are the train/tune split):
            Windex bottle, 025 mug (optional extra ``.[ycb]``; prepared into
            ``<data_dir>/ycb`` with their stated alignments).
 ``smoke``  the first two test drills, one placement, latent and rigid: the CI run.
+``objects`` the user's imported objects (``catgrasp import-object``), one directory each in
+           ``BenchmarkConfig.objects``; their records go to ``out/benchmark/``, not the committed tables.
 
 Trials: for every (instance, view, trial index) a placement and a camera come
 from :func:`trial_placement` -- seeded by (benchmark seed, instance, trial), so
@@ -43,7 +45,7 @@ from catgrasp_drake.errors import InputError
 
 #: The test split's data-set seed. Fixed; nothing (grasps, kernels, thresholds) is chosen on it.
 TEST_SEED = 7919
-SPLITS = ("test", "ycb", "smoke")
+SPLITS = ("test", "ycb", "smoke", "objects")
 CATEGORIES = ("drill", "spray_bottle", "mug")
 #: The YCB scans of each category that have the category's functional part.
 YCB_BY_CATEGORY = {"drill": ("ycb_035",), "spray_bottle": ("ycb_022",), "mug": ("ycb_025",)}
@@ -78,6 +80,7 @@ class BenchmarkConfig:
     placements: int = 3
     instances_per_category: int = 12
     instances: tuple[str, ...] | None = None  # restrict to these instance names
+    objects: tuple[str, ...] = ()  # split "objects": the imported objects' directories
     seed: int = 0
     noise: bool = True
     physics: str = "default"
@@ -97,6 +100,12 @@ class BenchmarkConfig:
             bad = [v for v in values if v not in known]
             if bad or not values:
                 raise InputError(f"{name}: unknown or empty {bad or values}; known: {', '.join(known)}")
+        if self.split == "objects" and not self.objects:
+            raise InputError("split objects: give the imported objects' directories (catgrasp import-object)")
+        if self.objects and self.split != "objects":
+            raise InputError(f"objects: given for split {self.split!r}; they are the split 'objects'")
+        if not all(isinstance(d, str) and d for d in self.objects):
+            raise InputError(f"objects: expected directory names, got {self.objects!r}")
         if self.physics not in PHYSICS:
             raise InputError(f"physics: expected one of {PHYSICS}, got {self.physics!r}")
         if not (isinstance(self.placements, int) and 1 <= self.placements <= 1000):
@@ -149,6 +158,18 @@ def split_objects(config: BenchmarkConfig) -> list[BenchmarkObject]:
             for i in range(n):
                 name = instance_name(category, i)
                 out.append(BenchmarkObject(config.split, category, name, str(root / category / name)))
+    elif config.split == "objects":
+        from catgrasp_drake.demo import imported_object
+
+        seen = {}
+        for directory in config.objects:
+            category, name = imported_object(directory)
+            if name in seen:
+                raise InputError(f"objects: {directory} and {seen[name]} are both named {name!r}; re-import one "
+                                 "with --name")
+            seen[name] = directory
+            if category in config.categories:
+                out.append(BenchmarkObject("objects", category, name, str(directory)))
     else:  # ycb
         from catgrasp_drake.data.ycb import prepare_ycb, ycb_dir
 
@@ -310,10 +331,14 @@ def trial_specs(config: BenchmarkConfig, model_paths: dict[str, str] | None = No
             path = Path((model_paths or {}).get(obj.category) or default_model_path(obj.category))
             models[obj.category] = (str(path), _sha256(path))
         path, sha = models[obj.category]
+        # an imported object may be re-imported into the same directory: its files are part of the cache key
+        own = ({"object_sha256": hashlib.sha256(b"".join(_sha256(Path(obj.model_dir) / f).encode() for f in (
+            f"{obj.instance}.obj", f"{obj.instance}.sdf", "annotations.json"))).hexdigest()}
+               if obj.split == "objects" else {})
         for view in config.views:
             for trial in range(placements):
                 for method in config.methods:
-                    specs.append({"task": "benchmark_trial", "split": obj.split, "category": obj.category,
+                    specs.append(own | {"task": "benchmark_trial", "split": obj.split, "category": obj.category,
                                   "instance": obj.instance, "model_dir": obj.model_dir, "trial": trial,
                                   "view": view, "method": method, "physics": config.physics, "seed": config.seed,
                                   "noise": bool(config.noise), "min_confidence": float(config.min_confidence),

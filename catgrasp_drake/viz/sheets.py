@@ -16,6 +16,7 @@ from catgrasp_drake.data.dataset import (
     list_instances,
     load_annotations,
     obj_bytes,
+    read_annotations,
 )
 from catgrasp_drake.data.ycb import ycb_annotations, ycb_instances, ycb_mesh_path, ycb_object
 from catgrasp_drake.viz.render import contact_sheet, render_mesh
@@ -95,3 +96,49 @@ def ycb_contact_sheet(root: str | os.PathLike | None, path: str | os.PathLike, *
     contact_sheet(images, labels, path, columns=4,
                   title="YCB objects aligned to the canonical frames (left) vs embedded instance (right); "
                         "+y right; red: functional region")
+
+
+# ----------------------------------------------------------------------------- an imported object
+_IMPORT_VIEWS = ((0.0, 10.0), (35.0, 20.0), (0.0, 80.0))  # side (+y right), 3/4, from above
+
+
+def import_sheet(directory: str | os.PathLike, path: str | os.PathLike | None = None, *,
+                 size: tuple[int, int] = (240, 240)) -> Path:
+    """The alignment of an imported object (``catgrasp import-object``) at a glance; returns the PNG's path.
+
+    Top row: the object in its canonical frame from the side (+x; +y, the
+    functional direction, points right), a 3/4 view and from above; bottom
+    row: the category's reference instance from the same cameras at the same
+    scale. Functional regions blended in red. Written atomically to ``path``
+    (default ``<directory>/alignment.png``).
+    """
+    directory = Path(directory)
+    ann = read_annotations(directory / "annotations.json")
+    name, category = ann["instance"], ann["category"]
+    ref = REFERENCE_INSTANCE[category]
+    ref_ann = load_annotations(category, ref)
+    lo = np.minimum(ann["bbox_min"], ref_ann["bbox_min"])
+    hi = np.maximum(ann["bbox_max"], ref_ann["bbox_max"])
+    color = tuple(CATEGORY_COLORS[category]) + (1.0,)
+    record = ann.get("import", {})
+    tf, fit = record.get("transform", {}), record.get("fit") or {}
+    how = (f"automatic: confidence {fit['confidence']:.2f}, scale {fit['scale']:.2f}" if tf.get("automatic")
+           else "stated transform")
+    rpy, xyz = tf.get("rpy_deg"), tf.get("xyz_m")
+    extra = (("rpy " + " ".join(f"{v:.1f}" for v in rpy) + " deg") if rpy else "",
+             ("xyz " + " ".join(f"{1000 * v:.1f}" for v in xyz) + " mm (canonical <- file)") if xyz else "")
+    images, labels = [], []
+    with tempfile.TemporaryDirectory(prefix="catgrasp_import_sheet_") as tmp:
+        tmp = Path(tmp)
+        for mesh_path, a, label in ((directory / f"{name}.obj", ann, f"{name} (imported)"),
+                                    (instance_mesh_path(category, ref), ref_ann, f"{ref} (embedded)")):
+            for k, view in enumerate(_IMPORT_VIEWS):
+                img = render_mesh(mesh_path, color=color, size=size, azimuth_deg=view[0], elevation_deg=view[1],
+                                  bounds=(lo, hi))
+                images.append(_overlay_regions(img, a.get("regions", {}), (lo, hi), view, size, tmp))
+                labels.append(label if k == 0 else extra[k - 1] if a is ann else "")
+    out = Path(path) if path is not None else directory / "alignment.png"
+    regions = ", ".join(ann.get("regions", {})) or "no functional region"
+    contact_sheet(images, labels, out, columns=len(_IMPORT_VIEWS),
+                  title=f"{name} as a {category} ({how}); +y right, z up; red: {regions}")
+    return out

@@ -17,7 +17,7 @@ from catgrasp_drake.benchmark.runner import (
     trial_placement,
     trial_specs,
 )
-from catgrasp_drake.errors import InputError
+from catgrasp_drake.errors import CatgraspError, InputError
 from catgrasp_drake.perception.object_cloud import _mask_depth
 from catgrasp_drake.station.scenario import load_scenario
 
@@ -86,6 +86,43 @@ def test_trial_specs_pair_every_method_on_the_same_trials(tmp_path):
         BenchmarkConfig(methods=("latent", "magic"))
     with pytest.raises(InputError, match="split"):
         BenchmarkConfig(split="train")
+
+
+def _imported(directory, instance="drill_05", name="my_drill"):
+    """An imported object (catgrasp import-object) with a stated alignment and region: no fit, fast."""
+    from catgrasp_drake.data.dataset import load_annotations, load_mesh
+    from catgrasp_drake.data.importer import import_mesh
+
+    regions = load_annotations("drill", instance)["regions"]
+    import_mesh(load_mesh("drill", instance), "drill", name, transform="0 0 0 0 0 0", regions=regions, out=directory)
+    return str(directory)
+
+
+def test_the_objects_split_runs_imported_objects(tmp_path):
+    from catgrasp_drake.benchmark.runner import split_objects
+
+    a, b = _imported(tmp_path / "a"), _imported(tmp_path / "b", "drill_06", "other_drill")
+    cfg = BenchmarkConfig(split="objects", objects=(a, b), methods=("latent", "rigid"), placements=2)
+    objects = split_objects(cfg)
+    assert [(o.split, o.category, o.instance, o.model_dir) for o in objects] == [
+        ("objects", "drill", "my_drill", a), ("objects", "drill", "other_drill", b)]
+    specs = trial_specs(cfg)
+    assert len(specs) == 2 * 2 * 2 and {s["model_dir"] for s in specs} == {a, b}
+    assert all(len(s["object_sha256"]) == 64 for s in specs)
+    assert split_objects(BenchmarkConfig(split="objects", objects=(a,), categories=("mug",))) == []
+    # re-imported into the same directory: the trials' cache keys change with the files
+    _imported(tmp_path / "a", "drill_07")
+    assert trial_specs(cfg)[0]["object_sha256"] != specs[0]["object_sha256"]
+    # the other splits' specs are unchanged (no key added: their caches stay valid)
+    assert "object_sha256" not in trial_specs(BenchmarkConfig(split="smoke", data_dir=str(tmp_path / "data")))[0]
+    with pytest.raises(InputError, match="directories"):
+        BenchmarkConfig(split="objects")
+    with pytest.raises(InputError, match="split 'objects'"):
+        BenchmarkConfig(split="test", objects=(a,))
+    with pytest.raises(InputError, match="both named"):
+        split_objects(BenchmarkConfig(split="objects", objects=(a, str(_imported(tmp_path / "c")))))
+    with pytest.raises(CatgraspError, match="no such object directory"):
+        split_objects(BenchmarkConfig(split="objects", objects=(str(tmp_path / "nothing"),)))
 
 
 @pytest.mark.slow

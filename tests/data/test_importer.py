@@ -307,3 +307,81 @@ def test_the_automatic_alignment_agrees_with_the_stated_ycb_transforms(tmp_path,
     monkeypatch.chdir(tmp_path)  # the default output directory, out/objects/..., lands here
     rot, mean = _ycb_disagreement(name, models, flip_ok)
     assert rot <= YCB_ROT_TOL_DEG and mean <= YCB_MEAN_TOL_M, f"{name}: {rot:.1f} deg, {1000 * mean:.1f} mm"
+
+
+# ----------------------------------------------------------------------------- the command line
+def _cli(argv, capsys):
+    from catgrasp_drake.cli import main
+
+    code = main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+@pytest.fixture(scope="module")
+def imported_dir(tmp_path_factory):
+    """``catgrasp import-object`` on a held-out drill lying on its side, into a temporary directory."""
+    from catgrasp_drake.cli import main
+
+    tmp = tmp_path_factory.mktemp("import_cli")
+    _, moved, T = _moved("drill", "drill_12")
+    path = _write_obj(tmp / "My Drill.obj", moved)
+    assert main(["import-object", str(path), "--category", "drill", "--out", str(tmp / "obj")]) == 0
+    return tmp / "obj", T
+
+
+def test_cli_imports_a_mesh_end_to_end(imported_dir):
+    from PIL import Image
+    from pydrake.multibody.parsing import Parser
+    from pydrake.multibody.plant import MultibodyPlant
+
+    directory, T = imported_dir
+    for f in ("my_drill.obj", "my_drill.sdf", "annotations.json", "alignment.png"):
+        assert (directory / f).is_file(), f
+    ann = read_annotations(directory / "annotations.json")
+    assert ann["category"] == "drill" and ann["instance"] == "my_drill" and ann["functional"] is True
+    rec = ann["import"]
+    assert rec["source"]["file"].endswith("My Drill.obj") and len(rec["source"]["sha256"]) == 64
+    assert rec["transform"]["automatic"] is True and rec["fit"]["confidence"] > LOW_CONFIDENCE
+    X = transform_matrix(rec["transform"]["rpy_deg"], rec["transform"]["xyz_m"])
+    rot, vertex = _errors(X, T, load_mesh("drill", "drill_12"))
+    assert rot <= ROT_TOL_DEG and vertex <= VERTEX_TOL_M["drill"]
+    assert "\nvn " in (directory / "my_drill.obj").read_text()
+    plant = MultibodyPlant(0.0)
+    (model,) = Parser(plant).AddModels(str(directory / "my_drill.sdf"))
+    plant.Finalize()
+    assert plant.GetBodyByName("body", model).default_mass() == pytest.approx(ann["mass_kg"])
+    png = Image.open(directory / "alignment.png")
+    assert png.size[0] >= 600 and png.size[1] >= 400
+
+
+def test_cli_errors_are_one_line(tmp_path, capsys):
+    mesh = load_mesh("drill", "drill_05")
+    mesh.apply_scale(1000.0)
+    mm = _write_obj(tmp_path / "mm.obj", mesh)
+    ok = _write_obj(tmp_path / "ok.obj", load_mesh("drill", "drill_05"))
+    for argv, what in [
+        (["import-object", mm, "--category", "drill"], "millimetres: scale it by 0.001"),
+        (["import-object", ok, "--category", "teapot"], "unknown category"),
+        (["import-object", tmp_path / "none.obj", "--category", "drill"], "not found"),
+        (["import-object", ok, "--category", "drill", "--transform", "1 2 3"], "six numbers"),
+        (["import-object", ok, "--category", "drill", "--region", "trigger", "a", "0", "0"], "--region"),
+        (["import-object", ok, "--category", "mug", "--region", "trigger", "0", "0", "0"], "'handle'"),
+        (["import-object", ok, "--category", "drill", "--model", tmp_path / "no.npz"], "no trained drill model"),
+        (["demo", "--object", tmp_path / "nothing", "--no-meshcat"], "no such object directory"),
+        (["benchmark", "--split", "ycb", "--objects", tmp_path], "split 'objects'"),
+    ]:
+        code, _, err = _cli(argv, capsys)
+        lines = [ln for ln in err.splitlines() if ln.strip()]
+        assert code != 0 and len(lines) == 1 and lines[0].startswith("catgrasp: error:") and what in lines[0], \
+            (argv, err)
+
+
+@pytest.mark.slow
+def test_demo_runs_on_an_imported_object(imported_dir, tmp_path, capsys):
+    directory, _ = imported_dir
+    code, out, err = _cli(["demo", "--object", directory, "--no-meshcat", "--out", tmp_path], capsys)
+    assert code == 0, err
+    assert "my_drill (imported from" in out and "judge" in out
+    record = json.loads((tmp_path / "result.json").read_text())
+    assert ":my_drill@" in record["scenario"] and record["plan_status"] == "ok"
