@@ -2,9 +2,10 @@
 one-line errors for bad input, the command line end to end, and the demo on an imported object.
 
 Known answers: a generated instance moved by a known rigid transform must come back to its own
-canonical frame (its annotations are the truth). Measured (all 45 instances, yaw 70, roll 90,
-shift): rotation <= 0.8 deg, vertices <= 8.2 mm (the drills' y, where the fit puts the model's
-origin), the transferred region overlapping the instance's own (IoU 0.29-0.91), the mass exact
+canonical frame (its annotations are the truth). Measured (benchmarks/bench_import.py, all 45
+instances; on the side: yaw 70, roll 90, shift): rotation <= 0.8 deg, vertices <= 8.2 mm (the
+drills' y, where the fit puts the model's origin), the transferred region overlapping the
+instance's own (IoU 0.29-0.91), the mass exact; upside down: rotation (yaw) up to 4.9 deg
 (docs/import.md).
 """
 
@@ -34,7 +35,7 @@ from catgrasp_drake.errors import CatgraspError, InputError, ModelFileError
 #: The brief's displacement: a yaw of 70 deg, a roll of 90 deg (on its side), a shift.
 MOVED = ((90.0, 0.0, 70.0), (0.3, -0.2, 0.5))
 #: Known-answer tolerances (measured maxima in the module docstring).
-ROT_TOL_DEG = 1.0
+ROT_TOL_DEG = 2.0
 VERTEX_TOL_M = {"drill": 0.010, "spray_bottle": 0.003, "mug": 0.003}
 
 
@@ -267,7 +268,7 @@ def test_transform_text_round_trips():
 #: (catgrasp_drake.data.ycb) within these: rotation (deg) and mean vertex displacement (m).
 #: Measured (docs/import.md): drill 2.8 deg / 4.9 mm, Windex 3.0 / 7.6, mug 2.3 / 1.5 (the
 #: automatic up direction is the scan's resting face, 2-3 deg from the stated, by-inspection one);
-#: the mustard bottle 3.7 deg / 3.6 mm once the arbitrary sign of its y is allowed for.
+#: the mustard bottle 3.7 deg / 2.1 mm once the arbitrary sign of its y is allowed for.
 YCB_ROT_TOL_DEG = 5.0
 YCB_MEAN_TOL_M = 0.010
 
