@@ -35,7 +35,8 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from catgrasp_drake.core.cpd import gaussian_kernel, joint_normalization, nonrigid_cpd  # noqa: E402
+from catgrasp_drake.core.cpd import joint_normalization, nonrigid_cpd  # noqa: E402
+from catgrasp_drake.core.kernels import gaussian_kernel  # noqa: E402
 
 BETA, LAM, W = 0.7, 5.0, 0.01  # normalised units (data RMS radius 1; 0.7 ~ the true field's 0.05 m)
 

@@ -63,6 +63,7 @@ from typing import Callable
 import numpy as np
 import scipy.linalg
 
+from catgrasp_drake.core.kernels import gaussian_kernel, kernel_width, low_rank_kernel, sqdist
 from catgrasp_drake.core.threads import blas_single_threaded, n_threads
 from catgrasp_drake.core.validation import as_points, count, non_negative, outlier_weight, positive
 from catgrasp_drake.errors import InputError
@@ -80,7 +81,6 @@ SIGMA2_FLOOR = 1e-10
 MAX_SOURCE_EXACT = 20_000
 MAX_SOURCE_LOW_RANK = 200_000
 #: Kernel trace fraction kept by ``low_rank="auto"``.
-AUTO_RANK_TRACE = 1.0 - 1e-4
 
 _BLOCK_ELEMENTS = 1 << 19  # E-step block: M x block <= 512k doubles = 4 MB per thread
 
@@ -141,55 +141,6 @@ class RigidCPDResult:
 
 
 # --------------------------------------------------------------------------- helpers
-
-
-def gaussian_kernel(A, B, beta) -> np.ndarray:
-    """``G[i, j] = exp(-|a_i - b_j|^2 / (2 beta^2))`` for (K, D) ``A`` and (L, D) ``B``."""
-    A = _kernel_points(A, "A")
-    B = _kernel_points(B, "B")
-    if A.shape[1] != B.shape[1]:
-        raise InputError(f"gaussian_kernel: expected (K, D) and (L, D) arrays, got {A.shape} and {B.shape}")
-    beta = kernel_width(beta)
-    d2 = sqdist(A, B)
-    d2 *= -0.5 / (beta * beta)
-    np.maximum(d2, -700.0, out=d2)
-    np.exp(d2, out=d2)
-    d2[d2 < 1e-150] = 0.0  # no subnormals downstream (they slow BLAS/LAPACK ~10x)
-    return d2
-
-
-def kernel_width(beta, name: str = "beta") -> float:
-    """``beta`` checked to be a positive width whose square neither underflows nor overflows."""
-    beta = positive(beta, name)
-    if not (1e-150 < beta < 1e150):
-        raise InputError(f"{name}: kernel width {beta:g} is out of the usable range (1e-150, 1e150)")
-    return beta
-
-
-def _kernel_points(A, name: str) -> np.ndarray:
-    try:
-        A = np.asarray(A)
-        if A.dtype.kind not in "iufO":
-            raise TypeError
-        A = A.astype(np.float64, copy=False)
-    except (TypeError, ValueError):
-        raise InputError(f"gaussian_kernel: {name} must be a numeric (K, D) array of real numbers") from None
-    if A.ndim != 2:
-        raise InputError(f"gaussian_kernel: {name} must be a (K, D) array, got shape {A.shape}")
-    if not np.all(np.isfinite(A)) or (A.size and float(np.abs(A).max()) > 1e100):
-        raise InputError(f"gaussian_kernel: {name} contains NaN, inf or coordinates beyond 1e100")
-    return A
-
-
-def sqdist(A: np.ndarray, B: np.ndarray) -> np.ndarray:
-    """Squared distances (K, L), exact to rounding (centred, clipped at 0)."""
-    c = 0.5 * (A.mean(axis=0) + B.mean(axis=0)) if len(A) and len(B) else 0.0
-    A = A - c
-    B = B - c
-    d2 = (A * A).sum(1)[:, None] + (B * B).sum(1)[None, :]
-    d2 -= 2.0 * (A @ B.T)
-    np.maximum(d2, 0.0, out=d2)
-    return d2
 
 
 def joint_normalization(source: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, float]:
@@ -350,82 +301,6 @@ def _check_common(source, target, w, max_iter, tol):
     max_iter = count(max_iter, "max_iter", 1)
     tol = non_negative(tol, "tol")
     return Y, X, w, max_iter, tol
-
-
-# --------------------------------------------------------------------------- low-rank kernel
-
-
-def _kernel_matmat(Y: np.ndarray, beta: float, B: np.ndarray) -> np.ndarray:
-    """``G(Y, Y) @ B`` with G built block by block (never stored)."""
-    M = Y.shape[0]
-    out = np.empty((M, B.shape[1]))
-    nb = max(16, _BLOCK_ELEMENTS // max(M, 1))
-    for lo in range(0, M, nb):
-        hi = min(M, lo + nb)
-        out[lo:hi] = gaussian_kernel(Y[lo:hi], Y, beta) @ B
-    return out
-
-
-def low_rank_kernel(Y, beta: float, rank, *, power_iterations: int = 2, seed: int = 0):
-    """Top eigenpairs of ``G(Y, Y)``: returns ``(Q (M, K), lam (K,), kept_trace_fraction)``.
-
-    Randomised subspace iteration (Halko et al. 2011, Alg. 4.4 + 5.3) with a
-    fixed seed (deterministic). ``rank`` is an int K or ``"auto"``: the smallest
-    K whose eigenvalues hold :data:`AUTO_RANK_TRACE` of ``trace(G) = M``
-    (predicted from a 300-point subsample's spectrum, verified, doubled if short).
-    """
-    Y = as_points(Y, "source", min_points=1)
-    M = Y.shape[0]
-    rng = np.random.default_rng(seed)
-    if rank == "auto":
-        # predict K from the spectrum of a strided subsample (eigenvalues scale ~ M / m), then verify
-        m = min(M, 300)
-        sub = Y[(np.arange(m) * (M / m)).astype(int)]
-        ev = np.sort(np.linalg.eigvalsh(gaussian_kernel(sub, sub, beta)))[::-1]
-        k_pred = int(np.searchsorted(np.cumsum(ev) / m, AUTO_RANK_TRACE) + 1)
-        k = min(M, int(1.25 * k_pred) + 8)
-        while True:
-            Q, lam = _randomized_eigh(Y, beta, k, power_iterations, rng)
-            kept = float(lam.sum()) / M
-            if kept >= AUTO_RANK_TRACE or k >= M:
-                break
-            k = min(M, 2 * k)
-        # trim to the smallest prefix that reaches the target
-        csum = np.cumsum(lam) / M
-        k_use = int(min(len(lam), np.searchsorted(csum, AUTO_RANK_TRACE) + 1))
-        return Q[:, :k_use], lam[:k_use], float(csum[k_use - 1])
-    try:
-        k = int(rank)
-    except (TypeError, ValueError):
-        raise InputError(f"low_rank: expected None, a positive int or 'auto', got {rank!r}") from None
-    if k < 1:
-        raise InputError(f"low_rank: rank must be >= 1, got {k}")
-    k = min(k, M)
-    Q, lam = _randomized_eigh(Y, beta, k, power_iterations, rng)
-    return Q, lam, float(lam.sum()) / M
-
-
-def _randomized_eigh(Y, beta, k, power_iterations, rng):
-    M = Y.shape[0]
-    if M <= 2 * k + 10 or M <= 200:
-        lam, Q = scipy.linalg.eigh(gaussian_kernel(Y, Y, beta), subset_by_index=[M - k, M - 1])
-    else:
-        p = min(M - k, max(10, k // 4))
-        Z = _kernel_matmat(Y, beta, rng.standard_normal((M, k + p)))
-        for _ in range(power_iterations):
-            Z, _ = np.linalg.qr(Z)
-            Z = _kernel_matmat(Y, beta, Z)
-        Z, _ = np.linalg.qr(Z)
-        GZ = _kernel_matmat(Y, beta, Z)
-        Bs = Z.T @ GZ
-        lam, S = np.linalg.eigh(0.5 * (Bs + Bs.T))
-        Q = Z @ S
-        lam, Q = lam[-k:], Q[:, -k:]
-    order = np.argsort(lam)[::-1]
-    lam = np.maximum(lam[order], 0.0)
-    Q = Q[:, order]
-    keep = lam > 1e-12 * max(lam[0], 1e-300)
-    return np.ascontiguousarray(Q[:, keep]), lam[keep]
 
 
 # --------------------------------------------------------------------------- non-rigid

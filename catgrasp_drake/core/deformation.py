@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from catgrasp_drake.core.cpd import gaussian_kernel, kernel_width, sqdist
+from catgrasp_drake.core.kernels import gaussian_kernel, kernel_width, sqdist
 from catgrasp_drake.core.rotations import orthonormalize
 from catgrasp_drake.core.validation import MAX_COORDINATE_M, as_points, count, non_negative, real_array
 from catgrasp_drake.errors import InputError

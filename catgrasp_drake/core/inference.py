@@ -57,15 +57,9 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial import cKDTree
 
-from catgrasp_drake.core.cpd import (
-    estep,
-    initial_sigma2,
-    kernel_width,
-    nonrigid_cpd,
-    sigma2_update,
-    weighted_procrustes,
-)
+from catgrasp_drake.core.cpd import estep, initial_sigma2, nonrigid_cpd, sigma2_update, weighted_procrustes
 from catgrasp_drake.core.deformation import deform_points, warp_poses
+from catgrasp_drake.core.kernels import kernel_width
 from catgrasp_drake.core.rotations import orthonormalize, rotz
 from catgrasp_drake.core.shape_space import ShapeSpace
 from catgrasp_drake.core.threads import n_threads, single_threaded_blas

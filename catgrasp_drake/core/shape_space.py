@@ -37,9 +37,10 @@ from typing import Callable, Mapping, Sequence
 import numpy as np
 from scipy.spatial import cKDTree
 
-from catgrasp_drake.core.cpd import DEFAULT_BETA_M, DEFAULT_LAMBDA, gaussian_kernel, kernel_width, nonrigid_cpd
+from catgrasp_drake.core.cpd import DEFAULT_BETA_M, DEFAULT_LAMBDA, nonrigid_cpd
 from catgrasp_drake.core.deformation import deform_points
 from catgrasp_drake.core.fileio import load_arrays, save_arrays
+from catgrasp_drake.core.kernels import gaussian_kernel, kernel_width
 from catgrasp_drake.core.validation import as_points, count, non_negative, positive, real_array, real_number
 from catgrasp_drake.errors import InputError, ModelFileError
 

@@ -5,14 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from catgrasp_drake.core.cpd import (
-    CPDIteration,
-    gaussian_kernel,
-    joint_normalization,
-    low_rank_kernel,
-    nonrigid_cpd,
-    rigid_cpd,
-)
+from catgrasp_drake.core.cpd import CPDIteration, joint_normalization, nonrigid_cpd, rigid_cpd
+from catgrasp_drake.core.kernels import gaussian_kernel, low_rank_kernel
 from catgrasp_drake.errors import InputError
 
 from .test_synthetic_shapes import blob, fibonacci_sphere

@@ -112,8 +112,8 @@ def test_anchored_warp_moves_the_anchor_with_the_field_and_keeps_the_body_rigid(
 
 def test_local_rotations_recover_a_rigid_rotation_of_the_neighbourhood():
     """Build W so that the canonical points near the origin rotate rigidly by 20 deg about z."""
-    from catgrasp_drake.core.cpd import gaussian_kernel
     from catgrasp_drake.core.deformation import local_rotations
+    from catgrasp_drake.core.kernels import gaussian_kernel
     from catgrasp_drake.core.rotations import rotz
 
     rng = np.random.default_rng(3)

@@ -6,7 +6,8 @@ import numpy as np
 from hypothesis import given
 from hypothesis import strategies as st
 
-from catgrasp_drake.core.cpd import gaussian_kernel, low_rank_kernel, nonrigid_cpd, rigid_cpd
+from catgrasp_drake.core.cpd import nonrigid_cpd, rigid_cpd
+from catgrasp_drake.core.kernels import gaussian_kernel, low_rank_kernel
 
 from .harness import attempt, finite_array, proper_rotations
 from .strategies import MUST_REJECT, WORDS, bad_numbers, choice, clouds, number, options, scaled
