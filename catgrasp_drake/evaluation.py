@@ -39,7 +39,7 @@ import numpy as np
 
 from catgrasp_drake.baselines import METHODS, predict_grasp
 from catgrasp_drake.category_model import CategoryModel
-from catgrasp_drake.core.fileio import atomic_write_text
+from catgrasp_drake.core.fileio import atomic_write_text, read_json_lines, text_sha256, write_json_lines
 from catgrasp_drake.data.dataset import list_instances
 from catgrasp_drake.errors import InputError, ModelFileError, one_line
 from catgrasp_drake.runner import code_fingerprint, run_tasks
@@ -282,16 +282,9 @@ def write_chart(category: str, table: dict, path) -> None:
     table_chart(category, rows, path)
 
 
-def _sha256_text(text: str) -> str:
-    return hashlib.sha256(text.encode("utf-8")).hexdigest()
-
-
 def write_records(path: str | Path, records: list[dict]) -> None:
     """Write trial records as JSON lines (atomically), after a header line with their count and sha256."""
-    body = "".join(json.dumps(r, sort_keys=True) + "\n" for r in records)
-    header = {"format": RECORDS_FORMAT, "format_version": FORMAT_VERSION, "records": len(records),
-              "sha256": _sha256_text(body)}
-    atomic_write_text(path, json.dumps(header, sort_keys=True) + "\n" + body)
+    write_json_lines(path, records, RECORDS_FORMAT, FORMAT_VERSION)
 
 
 def load_records(path: str | Path) -> list[dict]:
@@ -302,48 +295,15 @@ def load_records(path: str | Path) -> list[dict]:
     match its header's record count and checksum. (A file without the header
     line, written before it existed, is read without the checks.)
     """
-    path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, ValueError) as e:
-        raise ModelFileError(f"{path}: unreadable evaluation records ({one_line(e)})") from None
-    lines = text.splitlines(keepends=True)
-    header = None
-    if lines:
-        try:
-            first = json.loads(lines[0])
-        except ValueError:
-            first = None
-        if isinstance(first, dict) and "format" in first:
-            header, lines = first, lines[1:]
-    if header is not None:
-        if header.get("format") != RECORDS_FORMAT:
-            raise ModelFileError(f"{path}: is a {header.get('format')!r} file, expected {RECORDS_FORMAT!r}")
-        if header.get("format_version") != FORMAT_VERSION:
-            raise ModelFileError(f"{path}: format version {header.get('format_version')} but this catgrasp_drake "
-                                 f"reads version {FORMAT_VERSION}; re-run the evaluation")
-        if header.get("sha256") != _sha256_text("".join(lines)):
-            raise ModelFileError(f"{path}: checksum mismatch ({len(lines)} record lines, header says "
-                                 f"{header.get('records')}); the file is corrupt or was edited")
-    records = []
-    for n, line in enumerate(lines, start=2 if header is not None else 1):
-        if not line.strip():
-            continue
-        try:
-            r = json.loads(line)
-        except ValueError as e:
-            raise ModelFileError(f"{path}: line {n} is not JSON ({e}); the file is corrupt") from None
-        if not isinstance(r, dict):
-            raise ModelFileError(f"{path}: line {n} is a JSON {type(r).__name__}, not a trial record")
-        records.append(r)
-    return records
+    return read_json_lines(path, RECORDS_FORMAT, FORMAT_VERSION, what="evaluation records",
+                           rerun="re-run the evaluation", headerless_ok=True)
 
 
 def write_report(path: str | Path, report: dict) -> None:
     """Write ``report.json`` atomically with its format, version and sha256 (over the other fields)."""
     body = json.loads(json.dumps(report, default=str))  # what the file will hold
     out = {"format": REPORT_FORMAT, "format_version": FORMAT_VERSION} | body
-    out["sha256"] = _sha256_text(json.dumps(out, sort_keys=True))
+    out["sha256"] = text_sha256(json.dumps(out, sort_keys=True))
     atomic_write_text(path, json.dumps(out, indent=1, sort_keys=True) + "\n")
 
 
@@ -360,6 +320,6 @@ def load_report(path: str | Path) -> dict:
         raise ModelFileError(f"{path}: format version {data.get('format_version')} but this catgrasp_drake reads "
                              f"version {FORMAT_VERSION}; re-run the evaluation")
     body = {k: v for k, v in data.items() if k != "sha256"}
-    if data.get("sha256") != _sha256_text(json.dumps(body, sort_keys=True)):
+    if data.get("sha256") != text_sha256(json.dumps(body, sort_keys=True)):
         raise ModelFileError(f"{path}: checksum mismatch; the file is corrupt or was edited")
     return body

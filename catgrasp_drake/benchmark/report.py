@@ -23,7 +23,6 @@ README) and ``full`` (:func:`benchmark_tables`: every table, for
 
 from __future__ import annotations
 
-import hashlib
 import json
 import re
 from pathlib import Path
@@ -32,7 +31,7 @@ from typing import Iterable, Mapping, Sequence
 import numpy as np
 
 from catgrasp_drake.benchmark.stats import PAIR_KEY, bootstrap_rate, pair_records, paired_bootstrap
-from catgrasp_drake.errors import InputError, ModelFileError, one_line
+from catgrasp_drake.errors import InputError, one_line
 
 RECORDS_FORMAT = "catgrasp.benchmark_records"
 FORMAT_VERSION = 1
@@ -67,10 +66,6 @@ _CLOSE = re.compile(r"<!--\s*/benchmark:([A-Za-z0-9_.-]+)\s*-->")
 
 
 # ----------------------------------------------------------------------------- records files
-def _sha256_text(text: str) -> str:
-    return hashlib.sha256(text.encode("utf-8")).hexdigest()
-
-
 def _missing_fields(r) -> list[str]:
     if not isinstance(r, dict):
         return list(REQUIRED_FIELDS)
@@ -103,13 +98,9 @@ def _with_seed(records: Iterable[dict]) -> list[dict]:
 
 def write_benchmark_records(path: str | Path, records: Iterable[dict]) -> None:
     """Write trial records as JSON lines (keys sorted), atomically, after a header with their count and sha256."""
-    from catgrasp_drake.core.fileio import atomic_write_text
+    from catgrasp_drake.core.fileio import write_json_lines
 
-    records = _validated(records)
-    body = "".join(json.dumps(r, sort_keys=True) + "\n" for r in records)
-    header = {"format": RECORDS_FORMAT, "format_version": FORMAT_VERSION, "records": len(records),
-              "sha256": _sha256_text(body)}
-    atomic_write_text(path, json.dumps(header, sort_keys=True) + "\n" + body)
+    write_json_lines(path, _validated(records), RECORDS_FORMAT, FORMAT_VERSION)
 
 
 def _record_files(paths) -> list[Path]:
@@ -123,43 +114,14 @@ def _record_files(paths) -> list[Path]:
 
 
 def _load_one(path: Path) -> list[dict]:
-    try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, ValueError) as e:
-        raise ModelFileError(f"{path}: unreadable benchmark records ({one_line(e)})") from None
-    lines = text.splitlines(keepends=True)
-    try:
-        header = json.loads(lines[0]) if lines else None
-    except ValueError:
-        header = None
-    if not isinstance(header, dict) or "format" not in header:
-        raise ModelFileError(f"{path}: no header line; not a {RECORDS_FORMAT!r} file")
-    lines = lines[1:]
-    if header.get("format") != RECORDS_FORMAT:
-        raise ModelFileError(f"{path}: is a {header.get('format')!r} file, expected {RECORDS_FORMAT!r}")
-    if header.get("format_version") != FORMAT_VERSION:
-        raise ModelFileError(f"{path}: format version {header.get('format_version')} but this catgrasp_drake "
-                             f"reads version {FORMAT_VERSION}; re-run the benchmark")
-    count = sum(1 for line in lines if line.strip())
-    if header.get("sha256") != _sha256_text("".join(lines)) or header.get("records") != count:
-        raise ModelFileError(f"{path}: checksum mismatch ({count} record lines, header says "
-                             f"{header.get('records')}); the file is corrupt or was edited")
-    records = []
-    for n, line in enumerate(lines, start=2):
-        if not line.strip():
-            continue
-        try:
-            r = json.loads(line)
-        except ValueError as e:
-            raise ModelFileError(f"{path}: line {n} is not JSON ({one_line(e, with_type=False)}); "
-                                 f"the file is corrupt") from None
-        if not isinstance(r, dict):
-            raise ModelFileError(f"{path}: line {n} is a JSON {type(r).__name__}, not a trial record")
+    from catgrasp_drake.core.fileio import read_json_lines
+
+    def check(r):
         missing = _missing_fields(r)
-        if missing:
-            raise ModelFileError(f"{path}: line {n} lacks the fields {', '.join(missing)}")
-        records.append(r)
-    return records
+        return f"lacks the fields {', '.join(missing)}" if missing else None
+
+    return read_json_lines(path, RECORDS_FORMAT, FORMAT_VERSION, what="benchmark records",
+                           rerun="re-run the benchmark", check=check)
 
 
 def load_benchmark_records(paths: str | Path | Iterable[str | Path]) -> list[dict]:

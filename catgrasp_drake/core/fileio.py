@@ -129,3 +129,73 @@ def load_arrays(
     if header.get("sha256") != _arrays_checksum(arrays):
         raise ModelFileError(f"{path}: checksum mismatch; the file is corrupt or was edited")
     return arrays, header.get("meta", {})
+
+
+# ----------------------------------------------------------------------------- checksummed JSON lines
+def text_sha256(text: str) -> str:
+    """sha256 (hex) of ``text`` encoded as UTF-8."""
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+def write_json_lines(path: str | os.PathLike, records, fmt: str, version: int) -> None:
+    """Write ``records`` (JSON-able dicts) as JSON lines (keys sorted), atomically, after a header line
+    ``{"format", "format_version", "records": count, "sha256": of the record lines}``."""
+    body = "".join(json.dumps(r, sort_keys=True) + "\n" for r in records)
+    header = {"format": fmt, "format_version": version, "records": body.count("\n"), "sha256": text_sha256(body)}
+    atomic_write_text(path, json.dumps(header, sort_keys=True) + "\n" + body)
+
+
+def read_json_lines(path: str | os.PathLike, fmt: str, version: int, *, what: str, rerun: str,
+                    headerless_ok: bool = False, check=None) -> list[dict]:
+    """Read a :func:`write_json_lines` file back: one dict per record line.
+
+    ModelFileError (one line naming the file) when it is unreadable, has no
+    header (unless ``headerless_ok``: a file written before headers existed,
+    read without checks), is of another format or version, does not match its
+    header's count and checksum, or holds a line that is not a JSON object.
+    ``what`` names the content in messages ("evaluation records"), ``rerun``
+    says how to make a new file; ``check(record)`` may return a reason to
+    reject a line (e.g. missing fields).
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, ValueError) as e:
+        raise ModelFileError(f"{path}: unreadable {what} ({one_line(e)})") from None
+    lines = text.splitlines(keepends=True)
+    try:
+        header = json.loads(lines[0]) if lines else None
+    except ValueError:
+        header = None
+    if isinstance(header, dict) and "format" in header:
+        lines = lines[1:]
+        if header.get("format") != fmt:
+            raise ModelFileError(f"{path}: is a {header.get('format')!r} file, expected {fmt!r}")
+        if header.get("format_version") != version:
+            raise ModelFileError(f"{path}: format version {header.get('format_version')} but this catgrasp_drake "
+                                 f"reads version {version}; {rerun}")
+        count = sum(1 for line in lines if line.strip())
+        if header.get("sha256") != text_sha256("".join(lines)) or header.get("records", count) != count:
+            raise ModelFileError(f"{path}: checksum mismatch ({count} record lines, header says "
+                                 f"{header.get('records')}); the file is corrupt or was edited")
+        first = 2
+    elif headerless_ok:
+        first = 1
+    else:
+        raise ModelFileError(f"{path}: no header line; not a {fmt!r} file")
+    records = []
+    for n, line in enumerate(lines, start=first):
+        if not line.strip():
+            continue
+        try:
+            r = json.loads(line)
+        except ValueError as e:
+            raise ModelFileError(f"{path}: line {n} is not JSON ({one_line(e, with_type=False)}); "
+                                 "the file is corrupt") from None
+        if not isinstance(r, dict):
+            raise ModelFileError(f"{path}: line {n} is a JSON {type(r).__name__}, not a trial record")
+        why = check(r) if check is not None else None
+        if why:
+            raise ModelFileError(f"{path}: line {n} {why}")
+        records.append(r)
+    return records
