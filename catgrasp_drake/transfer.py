@@ -247,14 +247,14 @@ def make_transfer_diagram(scenario: Scenario, model: CategoryModel, meshcat: Mes
         # which would re-run CPD and the planner at every step
         builder.Connect(estimator.GetOutputPort("observed_cloud_W"), regressor.GetInputPort("observed_cloud_W"))
         builder.Connect(estimator.GetOutputPort("completed_cloud_W"), regressor.GetInputPort("completed_cloud_W"))
-    planning = make_planning_model(scenario)
     if method == "true_object":
         # the true object is known before the simulation starts: it is part of the planning model, not an
         # input port (a constant source's port would be re-evaluated, and the plan re-made, at every step)
+        planning = make_planning_model(scenario, true_object_points_W(scenario))
         generator = builder.AddNamedSystem("grasp_trajectory", MotionPlanner(
-            h.plant, h.arm, h.hand, make_planning_model(scenario, true_object_points_W(scenario)),
-            params=params, min_confidence=min_confidence))
+            h.plant, h.arm, h.hand, planning, params=params, min_confidence=min_confidence))
     else:
+        planning = make_planning_model(scenario)
         generator = builder.AddNamedSystem("grasp_trajectory", MotionPlanner(
             h.plant, h.arm, h.hand, planning, obstacle_model=functools.partial(make_planning_model, scenario),
             params=params, min_confidence=min_confidence))
@@ -349,7 +349,7 @@ def run_transfer(td: TransferDiagram, *, record_html=None, return_context: bool 
     timings["execute"] = time.perf_counter() - t0
     timings["simulated_s"] = sim_time
     timings["total"] = time.perf_counter() - t_all
-    measured = {k: float(getattr(verdict, k, float("nan"))) for k in
+    measured = {k: float(getattr(verdict, k)) for k in
                 ("trigger_force_N", "in_hand_shift_m", "in_hand_turn_deg")}
     result = TransferResult(grasp_success=verdict.grasp_success, functional_success=verdict.functional_success,
                             failure_reason=verdict.failure_reason, detail=verdict.detail,

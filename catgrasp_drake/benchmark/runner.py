@@ -41,16 +41,18 @@ from pathlib import Path
 import numpy as np
 
 from catgrasp_drake.core.fileio import atomic_write_text
+from catgrasp_drake.core.visibility import camera_on_sphere_position
+from catgrasp_drake.data.dataset import CATEGORIES
 from catgrasp_drake.errors import InputError
+from catgrasp_drake.evaluation import file_sha256
+from catgrasp_drake.transfer import VIEWS
 
 #: The test split's data-set seed. Fixed; nothing (grasps, kernels, thresholds) is chosen on it.
 TEST_SEED = 7919
 SPLITS = ("test", "ycb", "smoke", "objects")
-CATEGORIES = ("drill", "spray_bottle", "mug")
 #: The YCB scans of each category that have the category's functional part.
 YCB_BY_CATEGORY = {"drill": ("ycb_035",), "spray_bottle": ("ycb_022",), "mug": ("ycb_025",)}
 BENCHMARK_METHODS = ("latent", "paper", "nearest", "rigid", "cpd")
-VIEWS = ("single", "full")
 #: Physics settings: the default, and the sensitivity ablations (run on a subset).
 PHYSICS = ("default", "time_step_1e-3", "effort_1.0x", "friction_0.5")
 #: The station's hand is ~1.7x as strong as the real SVH (models/svh/README.md): "effort_1.0x" undoes it.
@@ -224,9 +226,7 @@ def trial_placement(scenario, instance: str, trial: int, seed: int, *, noise: bo
     az0 = math.degrees(math.atan2(offset[1], offset[0]))
     az = az0 + az_off
     target = target0 + shift_W
-    eye = target + distance * np.array([math.cos(math.radians(el)) * math.cos(math.radians(az)),
-                                        math.cos(math.radians(el)) * math.sin(math.radians(az)),
-                                        math.sin(math.radians(el))])
+    eye = camera_on_sphere_position(target, distance, math.radians(az), math.radians(el))
     camera = dataclasses.replace(base, X_WC=None, look_at_eye=tuple(float(v) for v in eye),
                                  look_at_target=tuple(float(v) for v in target))
     cloud = scenario.object_cloud
@@ -267,6 +267,8 @@ def trial_scenario(spec: dict):
 
 
 # ----------------------------------------------------------------------------- the trial task
+#: What a trial's record copies from its spec (the trial's identity and settings).
+TRIAL_KEYS = ("split", "category", "instance", "trial", "view", "method", "physics", "seed", "min_confidence", "noise")
 _MODELS: dict = {}
 
 
@@ -292,8 +294,7 @@ def benchmark_trial_task(spec: dict) -> dict:
     result = run_transfer(td)
     timings = {k: round(float(v), 4) for k, v in result.timings.items()} | {"build": round(build_s, 4)}
     timings["total"] = round(time.perf_counter() - t0, 4)
-    record = {k: spec[k] for k in ("split", "category", "instance", "trial", "view", "method", "physics", "seed",
-                                   "min_confidence", "noise")}
+    record = {k: spec[k] for k in TRIAL_KEYS}
     measured = {k: (None if not math.isfinite(v) else round(v, 6)) for k, v in result.judge.items()}
     return record | {
         "grasp": bool(result.grasp_success), "functional": bool(result.functional_success),
@@ -315,10 +316,6 @@ def benchmark_code_version() -> str:
     return code_fingerprint([root / "catgrasp_drake", root / "models"])
 
 
-def _sha256(path: str | Path) -> str:
-    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
-
-
 def trial_specs(config: BenchmarkConfig, model_paths: dict[str, str] | None = None) -> list[dict]:
     """One task spec per (object, view, trial, method); methods share each trial's placement and camera."""
     from catgrasp_drake.demo import default_model_path
@@ -329,10 +326,10 @@ def trial_specs(config: BenchmarkConfig, model_paths: dict[str, str] | None = No
     for obj in split_objects(config):
         if obj.category not in models:
             path = Path((model_paths or {}).get(obj.category) or default_model_path(obj.category))
-            models[obj.category] = (str(path), _sha256(path))
+            models[obj.category] = (str(path), file_sha256(path))
         path, sha = models[obj.category]
         # an imported object may be re-imported into the same directory: its files are part of the cache key
-        own = ({"object_sha256": hashlib.sha256(b"".join(_sha256(Path(obj.model_dir) / f).encode() for f in (
+        own = ({"object_sha256": hashlib.sha256(b"".join(file_sha256(Path(obj.model_dir) / f).encode() for f in (
             f"{obj.instance}.obj", f"{obj.instance}.sdf", "annotations.json"))).hexdigest()}
                if obj.split == "objects" else {})
         for view in config.views:
@@ -362,8 +359,7 @@ def run_benchmark(config: BenchmarkConfig, *, model_paths: dict[str, str] | None
     for spec, outcome in zip(specs, outcomes):
         r = dict(outcome.result)
         if "grasp" not in r:  # a dead worker or an exception inside the task: a failed trial, said so
-            r = {k: spec[k] for k in ("split", "category", "instance", "trial", "view", "method", "physics",
-                                      "seed", "min_confidence", "noise")} | {
+            r = {k: spec[k] for k in TRIAL_KEYS} | {
                 "grasp": False, "functional": False,
                 "reason": "worker_died" if r.get("worker_died") else "task_error",
                 "detail": str(r.get("error", r))[:300], "timings": {}}

@@ -219,21 +219,26 @@ def _apply_physics_knobs(plant: MultibodyPlant, scene_graph: SceneGraph, scenari
             if actuator.model_instance() == hand:
                 actuator.set_effort_limit(actuator.effort_limit() * p.hand_effort_scale)
     if p.object_friction is not None:
-        inspector = scene_graph.model_inspector()
-        for body_index in plant.GetBodyIndices(obj):
-            for gid in plant.GetCollisionGeometriesForBody(plant.get_body(body_index)):
-                props = ProximityProperties(inspector.GetProximityProperties(gid))
-                props.UpdateProperty("material", "coulomb_friction",
-                                     CoulombFriction(p.object_friction, p.object_friction))
-                scene_graph.AssignRole(plant.get_source_id(), gid, props, RoleAssign.kReplace)
+        friction = CoulombFriction(p.object_friction, p.object_friction)
+        _replace_proximity(plant, scene_graph, obj,
+                           lambda props: props.UpdateProperty("material", "coulomb_friction", friction))
     if p.hand_resolution_hint is not None:
-        inspector = scene_graph.model_inspector()
-        for body_index in plant.GetBodyIndices(hand):
-            for gid in plant.GetCollisionGeometriesForBody(plant.get_body(body_index)):
-                props = ProximityProperties(inspector.GetProximityProperties(gid))
-                if props.HasProperty("hydroelastic", "resolution_hint"):
-                    props.UpdateProperty("hydroelastic", "resolution_hint", float(p.hand_resolution_hint))
-                    scene_graph.AssignRole(plant.get_source_id(), gid, props, RoleAssign.kReplace)
+        def coarser(props):
+            if props.HasProperty("hydroelastic", "resolution_hint"):
+                props.UpdateProperty("hydroelastic", "resolution_hint", float(p.hand_resolution_hint))
+
+        _replace_proximity(plant, scene_graph, hand, coarser)
+
+
+def _replace_proximity(plant: MultibodyPlant, scene_graph: SceneGraph, instance, update) -> None:
+    """Re-assign every collision geometry of ``instance`` with its proximity properties passed through
+    ``update(props)`` (which edits the copy in place)."""
+    inspector = scene_graph.model_inspector()
+    for body_index in plant.GetBodyIndices(instance):
+        for gid in plant.GetCollisionGeometriesForBody(plant.get_body(body_index)):
+            props = ProximityProperties(inspector.GetProximityProperties(gid))
+            update(props)
+            scene_graph.AssignRole(plant.get_source_id(), gid, props, RoleAssign.kReplace)
 
 
 def _camera_models(spec: CameraSpec) -> tuple[ColorRenderCamera, DepthRenderCamera]:
