@@ -19,21 +19,15 @@ from pathlib import Path
 import numpy as np
 from PIL import Image, ImageDraw
 from pydrake.geometry import (
-    ClippingRange,
-    ColorRenderCamera,
     MakeRenderEngineVtk,
-    RenderCameraCore,
     RenderEngineVtkParams,
 )
-from pydrake.math import RigidTransform
 from pydrake.multibody.plant import AddMultibodyPlant, MultibodyPlantConfig
 from pydrake.systems.framework import DiagramBuilder
-from pydrake.systems.sensors import CameraInfo
 
 from catgrasp_drake.core.fileio import atomic_write_bytes
-from catgrasp_drake.core.visibility import look_at_matrix
 from catgrasp_drake.robot import models
-from catgrasp_drake.viz.render import rgb_array
+from catgrasp_drake.viz.render import render_color
 
 _RENDERER = "robot_vtk"
 
@@ -60,14 +54,8 @@ def _build(with_arm: bool):
 
 
 def _render(diagram, scene_graph, context, eye, target, size=(480, 480), fov_deg=35.0) -> np.ndarray:
-    sg_context = scene_graph.GetMyContextFromRoot(context)
-    query = scene_graph.get_query_output_port().Eval(sg_context)
-    w, h = size
-    core = RenderCameraCore(_RENDERER, CameraInfo(w, h, np.radians(fov_deg)), ClippingRange(0.01, 20.0),
-                            RigidTransform())
-    image = query.RenderColorImage(ColorRenderCamera(core, False), scene_graph.world_frame_id(),
-                                     RigidTransform(look_at_matrix(eye, target)))
-    return rgb_array(image)
+    query = scene_graph.get_query_output_port().Eval(scene_graph.GetMyContextFromRoot(context))
+    return render_color(query, scene_graph.world_frame_id(), eye, target, size, fov_deg, renderer=_RENDERER, far=20.0)
 
 
 def _sheet(images, labels, columns: int) -> bytes:

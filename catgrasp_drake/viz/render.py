@@ -73,11 +73,18 @@ def render_mesh(
     scene_graph.AssignRole(source, gid, props)
     context = scene_graph.CreateDefaultContext()
     query = scene_graph.get_query_output_port().Eval(context)
+    return render_color(query, scene_graph.world_frame_id(), eye, center, size, fov_y_deg)
+
+
+def render_color(query, frame_id, eye, target, size: tuple[int, int], fov_y_deg: float, *,
+                 renderer: str = _RENDERER, far: float = 10.0) -> np.ndarray:
+    """(H, W, 3) uint8 colour image of a SceneGraph ``query`` object from a camera at ``eye`` (m, in the frame
+    ``frame_id``) looking at ``target``, with the renderer named ``renderer``."""
     w, h = size
-    core = RenderCameraCore(_RENDERER, CameraInfo(w, h, np.radians(fov_y_deg)), ClippingRange(0.01, 10.0),
+    core = RenderCameraCore(renderer, CameraInfo(w, h, np.radians(fov_y_deg)), ClippingRange(0.01, far),
                             RigidTransform())
-    image = query.RenderColorImage(ColorRenderCamera(core, False), scene_graph.world_frame_id(),
-                                     RigidTransform(look_at_matrix(eye, center)))
+    X_WC = RigidTransform(look_at_matrix(eye, target))
+    image = query.RenderColorImage(ColorRenderCamera(core, False), frame_id, X_WC)
     return rgb_array(image)
 
 
