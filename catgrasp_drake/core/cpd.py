@@ -181,23 +181,33 @@ class EStep:
 
 _EXP_CLAMP = -300.0  # exponents below this are clamped (relative error < e^-50 per kept column)
 _BAD_LOGSUM = -250.0  # a column whose largest exponent is below this is redone in the log domain
+_NO_CLAMP_BOUND = 290.0  # every exponent provably >= -290 (> -300 after rounding): the clamp would change nothing
+# float32 blocks: e^-87 is the smallest power of e above float32's normal range (1.18e-38 = e^-87.3)
+_EXP_CLAMP32 = -87.0
+_BAD_LOGSUM32 = -60.0  # clamping at -87 then changes a kept column by < M e^-27 relative
+_EPS32 = float(np.finfo(np.float32).eps)
 
 
-def _estep_block(Ya, Ysc, X, Xa, sigma2, log_c, lo, hi):
+def _estep_block(Ya, Ysc, X, Xa, sigma2, log_c, lo, hi, clamp=True):
     """E-step for target columns lo:hi. Returns partial [P X | P 1] (M, D+1), Pt1 block, sum log den.
 
     Exponents are clamped at -300 before ``exp`` so that no subnormal number is
     ever produced (subnormals slow BLAS and ``exp`` down by 10x); a column whose
     kernel sum is below ``e^-250`` is recomputed exactly with a max-shift, so
     the clamp changes a kept column by less than ``M e^-50`` relative.
+    ``clamp=False`` when no exponent can be below -300 (the clamp is then a no-op).
+    With float32 ``Ya``/``Xa`` (``e_step="fast"``) the kernel values, their sums and products are float32
+    (clamp at -87, log-domain redo below ``e^-60``; the redo and the accumulation across blocks are float64).
     """
+    f32 = Ya.dtype == np.float32
     E = Ya @ Xa[lo:hi].T  # exponents -|y - x|^2 / (2 sigma2), (M, nb)
-    np.maximum(E, _EXP_CLAMP, out=E)
+    if clamp or f32:
+        np.maximum(E, _EXP_CLAMP32 if f32 else _EXP_CLAMP, out=E)
     np.exp(E, out=E)
-    s = E.sum(axis=0)
+    s = E.sum(axis=0).astype(np.float64, copy=False)
     c = math.exp(min(log_c, 700.0)) if log_c > -700.0 else 0.0  # (a huge given sigma2: no overflow)
     den = s + c
-    bad = s < math.exp(_BAD_LOGSUM)
+    bad = s < math.exp(_BAD_LOGSUM32 if f32 else _BAD_LOGSUM)
     with np.errstate(divide="ignore"):
         logden = np.log(den)
     inv = 1.0 / np.where(bad, 1.0, den)
@@ -210,61 +220,86 @@ def _estep_block(Ya, Ysc, X, Xa, sigma2, log_c, lo, hi):
         log_shifted_c = log_c - m
         den_b = a.sum(axis=0) + np.exp(np.minimum(log_shifted_c, 700.0))
         pb = a / den_b
-        pb[pb < 1e-200] = 0.0  # outliers far from everything: exactly no mass, no subnormals
+        pb[pb < (1e-30 if f32 else 1e-200)] = 0.0  # outliers far from everything: exactly no mass, no subnormals
         E[:, idx] = pb
         inv[idx] = 1.0
         pt1[idx] = pb.sum(axis=0)
         logden[idx] = m + np.logaddexp(np.log(a.sum(axis=0)), log_shifted_c)
-    rhs = np.empty((hi - lo, X.shape[1] + 1))
+    rhs = np.empty((hi - lo, X.shape[1] + 1), dtype=E.dtype)
     rhs[:, :-1] = X[lo:hi] * inv[:, None]
     rhs[:, -1] = inv
     acc = E @ rhs
-    return acc, pt1, float(logden.sum())
+    return acc.astype(np.float64, copy=False), pt1, float(logden.sum())
 
 
-def estep(Y_t: np.ndarray, X: np.ndarray, sigma2: float, w: float, *, pool=None,
-          log_uniform: float | None = None) -> EStep:
-    """CPD E-step for transformed source ``Y_t`` (M, D) and targets ``X`` (N, D).
+def _log_uniform(w, sigma2, D, M, N):
+    """Log of the uniform term ``c`` of paper eq. 7 (-inf without outliers)."""
+    if w > 0.0:
+        return 0.5 * D * math.log(2.0 * math.pi * sigma2) + math.log(w / (1.0 - w)) + math.log(M / N)
+    return -math.inf
 
-    ``log_uniform`` overrides the log of the uniform-term constant ``c`` (the
-    default is paper eq. 7's ``(2 pi sigma2)^(D/2) w/(1-w) M/N``). Works in any
-    units but is written for normalised coordinates.
-    """
+
+def _augmented(Y_t, X, sigma2, dtype=np.float64):
+    """Centred coordinates and the augmented factors whose product is the exponent matrix."""
     M, D = Y_t.shape
     N = X.shape[0]
-    if log_uniform is not None:
-        log_c = log_uniform
-    elif w > 0.0:
-        log_c = 0.5 * D * math.log(2.0 * math.pi * sigma2) + math.log(w / (1.0 - w)) + math.log(M / N)
-    else:
-        log_c = -math.inf
-    # centre for accurate augmented GEMM
     ctr = X.mean(axis=0)
     Ysc = Y_t - ctr
     Xc = X - ctr
     inv2s = 0.5 / sigma2
-    Ya = np.empty((M, D + 2))
+    Ya = np.empty((M, D + 2), dtype=dtype)
     Ya[:, :D] = Ysc / sigma2
     Ya[:, D] = -inv2s * (Ysc * Ysc).sum(1)
     Ya[:, D + 1] = 1.0
-    Xa = np.empty((N, D + 2))
+    Xa = np.empty((N, D + 2), dtype=dtype)
     Xa[:, :D] = Xc
     Xa[:, D] = 1.0
     Xa[:, D + 1] = -inv2s * (Xc * Xc).sum(1)
+    return ctr, Ysc, Xc, Ya, Xa
+
+
+def exponent_bound(Ysc: np.ndarray, Xc: np.ndarray, sigma2: float) -> float:
+    """``(max|y| + max|x|)^2 / (2 sigma2)`` for centred clouds: bounds every exponent's magnitude and the sum
+    of the magnitudes of the terms of its augmented product (hence its rounding error, ~8 eps times this)."""
+    ry = math.sqrt(float((Ysc * Ysc).sum(1).max()))
+    rx = math.sqrt(float((Xc * Xc).sum(1).max()))
+    return (ry + rx) ** 2 / (2.0 * sigma2)
+
+
+def estep(Y_t: np.ndarray, X: np.ndarray, sigma2: float, w: float, *, pool=None,
+          log_uniform: float | None = None, dtype=np.float64) -> EStep:
+    """CPD E-step for transformed source ``Y_t`` (M, D) and targets ``X`` (N, D).
+
+    ``log_uniform`` overrides the log of the uniform-term constant ``c`` (the
+    default is paper eq. 7's ``(2 pi sigma2)^(D/2) w/(1-w) M/N``). Works in any
+    units but is written for normalised coordinates. ``dtype=np.float32`` evaluates
+    the kernel in float32 (twice the speed; exponent error ~8 eps32 :func:`exponent_bound`).
+    """
+    M, D = Y_t.shape
+    N = X.shape[0]
+    log_c = _log_uniform(w, sigma2, D, M, N) if log_uniform is None else log_uniform
+    # centre for accurate augmented GEMM
+    ctr, Ysc, Xc, Ya, Xa = _augmented(Y_t, X, sigma2, dtype)
+    clamp = exponent_bound(Ysc, Xc, sigma2) > _NO_CLAMP_BOUND
     nb = max(16, _BLOCK_ELEMENTS // max(M, 1))
     if pool is not None:  # at least THREADED_BLOCKS blocks, a fixed number: results independent of the cores
         nb = max(16, min(nb, -(-N // THREADED_BLOCKS)))
     bounds = [(lo, min(N, lo + nb)) for lo in range(0, N, nb)]
     args = (Ya, Ysc, Xc, Xa, sigma2, log_c)
     if pool is not None and len(bounds) > 1:
-        parts = list(pool.map(lambda b: _estep_block(*args, *b), bounds))
+        parts = list(pool.map(lambda b: _estep_block(*args, *b, clamp=clamp), bounds))
     else:
-        parts = [_estep_block(*args, lo, hi) for lo, hi in bounds]
+        parts = [_estep_block(*args, lo, hi, clamp=clamp) for lo, hi in bounds]
     acc = parts[0][0]
     for p in parts[1:]:
         acc = acc + p[0]
     Pt1 = np.concatenate([p[1] for p in parts])
     sum_logden = sum(p[2] for p in parts)
+    return _statistics(acc, Pt1, sum_logden, ctr, w, sigma2, M, N, D)
+
+
+def _statistics(acc, Pt1, sum_logden, ctr, w, sigma2, M, N, D) -> EStep:
+    """EStep from the accumulated [P Xc | P 1] (Xc = X - ctr), P^T 1 and sum_n log den_n."""
     P1 = acc[:, -1].copy()
     P1[P1 < 1e-100] = 0.0  # keeps d(P1) G free of subnormals
     PX = acc[:, :-1] + np.outer(P1, ctr)  # undo the centring of X
@@ -380,27 +415,27 @@ def nonrigid_cpd(
     s2 = initial_sigma2(Yn, Xn) if sigma2 is None else positive(sigma2, "sigma2") / scale**2
     s2 = max(s2, SIGMA2_FLOOR)
 
-    if low_rank is None:
-        G = gaussian_kernel(Yn, Yn, bn)
-        Q = lam_k = None
-        rank, kept = M, 1.0
-    else:
-        Q, lam_k, kept = low_rank_kernel(Yn, bn, low_rank)
-        G = None
-        rank = Q.shape[1]
-
-    Wn = np.zeros((M, D))
-    Z = np.zeros((rank, D)) if Q is not None else None
-    T = Yn.copy()
-    reg = 0.0
-    f_prev = math.inf
-    converged = False
-    it = 0
-    e = None
     # threaded by problem size only (a 1-worker pool on one core): the block layout, hence the rounding
     # of the E-step sums, is the same on every machine
     pool = ThreadPoolExecutor(n_threads()) if M * N >= 200_000 else None
     try:
+        if low_rank is None:
+            G = gaussian_kernel(Yn, Yn, bn)
+            Q = lam_k = None
+            rank, kept = M, 1.0
+        else:
+            Q, lam_k, kept = low_rank_kernel(Yn, bn, low_rank, pool=pool)
+            G = None
+            rank = Q.shape[1]
+
+        Wn = np.zeros((M, D))
+        Z = np.zeros((rank, D)) if Q is not None else None
+        T = Yn.copy()
+        reg = 0.0
+        f_prev = math.inf
+        converged = False
+        it = 0
+        e = None
         for it in range(1, max_iter + 1):
             e = estep(T, Xn, s2, w, pool=pool)
             f = e.nll + 0.5 * lam * reg

@@ -18,6 +18,9 @@ from catgrasp_drake.errors import InputError
 AUTO_RANK_TRACE = 1.0 - 1e-4
 #: Block size (elements) of the kernel products built without storing G.
 KERNEL_BLOCK_ELEMENTS = 1 << 19
+#: ``low_rank_kernel`` keeps the row blocks of ``G(Y, Y)`` between its products up to this many elements
+#: (64 MiB; M <= 2896), and recomputes them block by block above (memory O(M x block)).
+KERNEL_STORE_ELEMENTS = 1 << 23
 
 
 def gaussian_kernel(A, B, beta) -> np.ndarray:
@@ -69,28 +72,59 @@ def sqdist(A: np.ndarray, B: np.ndarray) -> np.ndarray:
     return d2
 
 
-def _kernel_matmat(Y: np.ndarray, beta: float, B: np.ndarray) -> np.ndarray:
-    """``G(Y, Y) @ B`` with G built block by block (never stored)."""
-    M = Y.shape[0]
-    out = np.empty((M, B.shape[1]))
-    nb = max(16, KERNEL_BLOCK_ELEMENTS // max(M, 1))
-    for lo in range(0, M, nb):
-        hi = min(M, lo + nb)
-        out[lo:hi] = gaussian_kernel(Y[lo:hi], Y, beta) @ B
-    return out
+class _KernelProduct:
+    """``B -> G(Y, Y) @ B`` in fixed row blocks, optionally stored and computed in a thread pool.
+
+    Each row block is ``gaussian_kernel(Y[lo:hi], Y, beta) @ B[...]``, whatever the storage and the
+    threads, so the result is the same bit for bit (blocks are independent; the layout depends on M only).
+    """
+
+    def __init__(self, Y: np.ndarray, beta: float, *, pool=None, store: bool | None = None):
+        M = Y.shape[0]
+        nb = max(16, KERNEL_BLOCK_ELEMENTS // max(M, 1))
+        self.Y, self.beta, self.pool = Y, beta, pool
+        self.bounds = [(lo, min(M, lo + nb)) for lo in range(0, M, nb)]
+        self.store = (M * M <= KERNEL_STORE_ELEMENTS) if store is None else bool(store)
+        self.blocks = None
+
+    def _map(self, fn):
+        if self.pool is not None and len(self.bounds) > 1:
+            return list(self.pool.map(fn, range(len(self.bounds))))
+        return [fn(k) for k in range(len(self.bounds))]
+
+    def _block(self, k):
+        lo, hi = self.bounds[k]
+        return gaussian_kernel(self.Y[lo:hi], self.Y, self.beta)
+
+    def __call__(self, B: np.ndarray) -> np.ndarray:
+        if self.store and self.blocks is None:
+            self.blocks = self._map(self._block)
+        blocks = self.blocks
+        out = np.empty((self.Y.shape[0], B.shape[1]))
+
+        def product(k):
+            lo, hi = self.bounds[k]
+            out[lo:hi] = (blocks[k] if blocks is not None else self._block(k)) @ B
+
+        self._map(product)
+        return out
 
 
-def low_rank_kernel(Y, beta: float, rank, *, power_iterations: int = 2, seed: int = 0):
+def low_rank_kernel(Y, beta: float, rank, *, power_iterations: int = 2, seed: int = 0, pool=None):
     """Top eigenpairs of ``G(Y, Y)``: returns ``(Q (M, K), lam (K,), kept_trace_fraction)``.
 
     Randomised subspace iteration (Halko et al. 2011, Alg. 4.4 + 5.3) with a
     fixed seed (deterministic). ``rank`` is an int K or ``"auto"``: the smallest
     K whose eigenvalues hold :data:`AUTO_RANK_TRACE` of ``trace(G) = M``
     (predicted from a 300-point subsample's spectrum, verified, doubled if short).
+    ``pool`` (a ``concurrent.futures`` executor) computes the kernel's row blocks in threads; the
+    blocks are kept between the products up to :data:`KERNEL_STORE_ELEMENTS`. Neither changes a bit
+    of the result.
     """
     Y = as_points(Y, "source", min_points=1)
     M = Y.shape[0]
     rng = np.random.default_rng(seed)
+    product = _KernelProduct(Y, beta, pool=pool)
     if rank == "auto":
         # predict K from the spectrum of a strided subsample (eigenvalues scale ~ M / m), then verify
         m = min(M, 300)
@@ -99,7 +133,7 @@ def low_rank_kernel(Y, beta: float, rank, *, power_iterations: int = 2, seed: in
         k_pred = int(np.searchsorted(np.cumsum(ev) / m, AUTO_RANK_TRACE) + 1)
         k = min(M, int(1.25 * k_pred) + 8)
         while True:
-            Q, lam = _randomized_eigh(Y, beta, k, power_iterations, rng)
+            Q, lam = _randomized_eigh(Y, beta, k, power_iterations, rng, product)
             kept = float(lam.sum()) / M
             if kept >= AUTO_RANK_TRACE or k >= M:
                 break
@@ -115,22 +149,22 @@ def low_rank_kernel(Y, beta: float, rank, *, power_iterations: int = 2, seed: in
     if k < 1:
         raise InputError(f"low_rank: rank must be >= 1, got {k}")
     k = min(k, M)
-    Q, lam = _randomized_eigh(Y, beta, k, power_iterations, rng)
+    Q, lam = _randomized_eigh(Y, beta, k, power_iterations, rng, product)
     return Q, lam, float(lam.sum()) / M
 
 
-def _randomized_eigh(Y, beta, k, power_iterations, rng):
+def _randomized_eigh(Y, beta, k, power_iterations, rng, product):
     M = Y.shape[0]
     if M <= 2 * k + 10 or M <= 200:
         lam, Q = scipy.linalg.eigh(gaussian_kernel(Y, Y, beta), subset_by_index=[M - k, M - 1])
     else:
         p = min(M - k, max(10, k // 4))
-        Z = _kernel_matmat(Y, beta, rng.standard_normal((M, k + p)))
+        Z = product(rng.standard_normal((M, k + p)))
         for _ in range(power_iterations):
             Z, _ = np.linalg.qr(Z)
-            Z = _kernel_matmat(Y, beta, Z)
+            Z = product(Z)
         Z, _ = np.linalg.qr(Z)
-        GZ = _kernel_matmat(Y, beta, Z)
+        GZ = product(Z)
         Bs = Z.T @ GZ
         lam, S = np.linalg.eigh(0.5 * (Bs + Bs.T))
         Q = Z @ S
