@@ -1,13 +1,15 @@
 """Speed levers with their fidelity guard: the same reference trials at the default and at faster settings.
 
-    python benchmarks/bench_fidelity.py [--hint 0.010] [--workers 2] [--json out/fidelity.json]
+    python benchmarks/bench_fidelity.py [--lever time_step=0.02 ...] [--workers 2] [--json out/fidelity.json]
 
 The reference set (>= 60 trials, successes and failures, three categories):
 the hand-written grasp on every committed instance (13 drills, 17 spray
 bottles, 15 mugs) and the same grasp moved 1 cm forward on the first five of
 each category (which fail more often). Every trial is run at the default
-plant settings and at each lever (``--hint``: the hand's hydroelastic
-resolution hint, m, replacing the model's 6 mm). Printed per setting: wall
+plant settings (``--baseline``, default: the station's ``PlantSpec`` as it
+was tuned, time step 5 ms) and at each lever (``--lever``: ``PlantSpec``
+fields replaced, e.g. ``time_step=0.02``, ``hand_resolution_hint=0.010``,
+``time_step=0.01,discrete_contact_approximation=lagged``). Printed per setting: wall
 time of the whole set on the workers, the median real-time rate of a trial
 (simulated / wall seconds of one core), and the agreement with the default
 (grasp and functional outcome both equal) -- issue 17's guard is >= 95 %.
@@ -32,6 +34,28 @@ sys.path.insert(0, str(ROOT / "diagrams"))
 CATEGORIES = ("drill", "spray_bottle", "mug")
 SHIFTED_PER_CATEGORY = 5
 SHIFT_O = (0.0, 0.01, 0.0)
+#: The physics the station was tuned with (issue 17's "today's outcome").
+BASELINE = "time_step=0.005"
+
+
+def parse_setting(text: str) -> dict:
+    """``"time_step=0.02,hand_resolution_hint=0.01"`` -> ``{"time_step": 0.02, ...}`` (PlantSpec fields)."""
+    from dataclasses import fields
+
+    from catgrasp_drake.station.scenario import PlantSpec
+
+    known = {f.name: f.type for f in fields(PlantSpec)}
+    out = {}
+    for item in filter(None, (t.strip() for t in text.split(","))):
+        key, sep, value = item.partition("=")
+        if not sep or key not in known:
+            raise SystemExit(f"--lever/--baseline: {item!r} is not <PlantSpec field>=<value> "
+                             f"(fields: {', '.join(sorted(known))})")
+        try:
+            out[key] = float(value)
+        except ValueError:
+            out[key] = value
+    return out
 
 
 def fidelity_task(spec: dict) -> dict:
@@ -44,7 +68,7 @@ def fidelity_task(spec: dict) -> dict:
 
     category, instance = spec["category"], spec["instance"]
     base = with_instance(load_scenario(f"{category}_default"), instance)
-    scenario = base.replace(plant=replace(base.plant, hand_resolution_hint=spec["hint"]))
+    scenario = base.replace(plant=replace(base.plant, **spec["plant"]))
     motion = load_handwritten_motion(category, instance)
     if spec["shifted"]:
         motion = varied(motion, category, instance, SHIFT_O, (0.0, 0.0, 0.0))
@@ -69,39 +93,64 @@ def main(argv=None) -> int:
     from catgrasp_drake.runner import run_tasks
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--hint", type=float, nargs="+", default=[0.010], help="hand resolution hints to try (m)")
+    ap.add_argument("--baseline", default=BASELINE,
+                    help=f"the settings whose outcomes the levers must reproduce (default {BASELINE!r})")
+    ap.add_argument("--lever", nargs="+", default=["time_step=0.01", "time_step=0.02"],
+                    help="settings to try, each '<PlantSpec field>=<value>[,...]'")
+    ap.add_argument("--accurate", default=None,
+                    help="also run this (e.g. 'time_step=0.001') and print every setting's agreement with it: "
+                         "how far the baseline itself is from a converged answer")
+    ap.add_argument("--reuse", default=None, metavar="JSON",
+                    help="take the settings already measured in this --json file of an earlier run")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--json", default=None, help="also write every trial's outcome here")
     args = ap.parse_args(argv)
 
     trials = reference_set()
-    settings = [None] + list(args.hint)
+    settings = [args.baseline] + list(args.lever) + ([args.accurate] if args.accurate else [])
+    plants = {s: parse_setting(s) for s in settings}
     results = {}
-    for hint in settings:
-        specs = [t | {"hint": hint} for t in trials]
+    if args.reuse:
+        earlier = json.loads(Path(args.reuse).read_text())
+        if earlier["trials"] != trials:
+            raise SystemExit(f"--reuse {args.reuse}: made on another reference set")
+        results = {s: (r, float("nan")) for s, r in earlier["results"].items() if s in settings}
+        results = {s: (r, earlier.get("wall_s", {}).get(s, float("nan"))) for s, (r, _) in results.items()}
+    for setting in settings:
+        if setting in results:
+            print(f"setting {setting}: reused from {args.reuse}", file=sys.stderr, flush=True)
+            continue
+        specs = [t | {"plant": plants[setting]} for t in trials]
         t0 = time.perf_counter()
         outcomes = run_tasks(fidelity_task, specs, cache_dir=None, code_version="fidelity", workers=args.workers)
-        results[hint] = ([o.result for o in outcomes], time.perf_counter() - t0)
-        print(f"setting hint={hint}: {len(specs)} trials in {results[hint][1]:.0f} s", file=sys.stderr, flush=True)
+        results[setting] = ([o.result for o in outcomes], time.perf_counter() - t0)
+        print(f"setting {setting}: {len(specs)} trials in {results[setting][1]:.0f} s", file=sys.stderr, flush=True)
 
-    base, _ = results[None]
+    base, _ = results[args.baseline]
     print(f"reference set: {len(trials)} trials (hand-written grasp on every committed instance, and moved "
           f"{SHIFT_O[1] * 100:.0f} cm on {SHIFTED_PER_CATEGORY} per category); {args.workers} workers")
-    print("| setting | wall time of the set | median real-time rate | grasped | functional | agreement |")
-    print("|---|---:|---:|---:|---:|---:|")
-    for hint in settings:
-        rs, wall = results[hint]
+    def agreement(xs, ys) -> str:
+        n = sum(1 for a, b in zip(xs, ys) if "grasp" in a and "grasp" in b
+                and (a["grasp"], a["functional"]) == (b["grasp"], b["functional"]))
+        return f"{n}/{len(xs)} ({100 * n / len(xs):.0f} %)"
+
+    extra = f" agreement with {args.accurate} |" if args.accurate else ""
+    print(f"| setting | wall time of the set | median real-time rate | grasped | functional | agreement |{extra}")
+    print("|---|---:|---:|---:|---:|---:|" + ("---:|" if args.accurate else ""))
+    for setting in settings:
+        rs, wall = results[setting]
         ok = [r for r in rs if "grasp" in r]
         rates = [r["sim_s"] / r["wall_s"] for r in ok if r["sim_s"] > 0]
-        agree = sum(1 for a, b in zip(base, rs) if "grasp" in a and "grasp" in b
-                    and (a["grasp"], a["functional"]) == (b["grasp"], b["functional"]))
-        name = "default (6 mm)" if hint is None else f"hand resolution hint {hint * 1000:.0f} mm"
+        name = f"{setting} (baseline)" if setting == args.baseline else setting
+        tail = f" {agreement(results[args.accurate][0], rs)} |" if args.accurate else ""
         print(f"| {name} | {wall:.0f} s | {statistics.median(rates):.2f}x | {sum(r['grasp'] for r in ok)}/{len(rs)} "
-              f"| {sum(r['functional'] for r in ok)}/{len(rs)} | {agree}/{len(rs)} ({100 * agree / len(rs):.0f} %) |")
+              f"| {sum(r['functional'] for r in ok)}/{len(rs)} | {agreement(base, rs)} |{tail}")
     if args.json:
         from catgrasp_drake.core.fileio import atomic_write_text
 
-        atomic_write_text(args.json, json.dumps({str(h): r for h, (r, _) in results.items()}, indent=1) + "\n")
+        record = {"trials": trials, "results": {s: r for s, (r, _) in results.items()},
+                  "wall_s": {s: w for s, (_, w) in results.items()}}
+        atomic_write_text(args.json, json.dumps(record, indent=1) + "\n")
     return 0
 
 

@@ -355,6 +355,55 @@ def _cmd_import_object(args) -> int:
     return 0
 
 
+def _cmd_film(args) -> int:
+    if args.record:
+        from catgrasp_drake.benchmark.report import load_benchmark_records
+        from catgrasp_drake.benchmark.runner import film_benchmark_trial
+
+        records = load_benchmark_records([args.record])
+        if not 0 <= args.index < len(records):
+            raise InputError(f"--index: {args.index} is not a record of {args.record} (it holds {len(records)})")
+        record = records[args.index]
+        out = Path(args.out or f"out/film/{record['instance']}_t{record['trial']}_{record['method']}.png")
+        result, spec = film_benchmark_trial(record, out, data_dir=args.data,
+                                            objects=[args.object] if args.object else ())
+        then = "functional" if record["functional"] else "grasped" if record["grasp"] else "failed"
+        now = "functional" if result.functional_success else "grasped" if result.grasp_success else "failed"
+        same = "" if (then, spec["model_sha256"]) == (now, record["model_sha256"]) else (
+            f" -- the record says {then}" + (" (its model file has changed since)"
+                                               if spec["model_sha256"] != record["model_sha256"] else ""))
+        print(f"wrote {out}: {now} ({result.failure_reason or 'ok'}){same}")
+        return 0
+    from catgrasp_drake.demo import imported_object
+    from catgrasp_drake.film import film_grasp
+    from catgrasp_drake.station.handwritten import load_handwritten_motion, shifted_motion
+    from catgrasp_drake.station.scenario import load_scenario, random_placement, with_instance
+
+    if args.object:
+        category, instance = imported_object(args.object)
+        if args.category and args.category != category:
+            raise InputError(f"--category {args.category}: {args.object} holds a {category}")
+    else:
+        if not args.category:
+            raise InputError("give --category (with --instance) or --object DIR or --record FILE")
+        category = args.category
+        instances = _check_category(category)
+        instance = args.instance or instances[0]
+        _check_instances(category, [instance], "--instance")
+    scenario = with_instance(load_scenario(f"{category}_default"), instance, category=category,
+                             model_dir=args.object)
+    if args.seed is not None:
+        scenario = random_placement(scenario, args.seed)
+    motion = load_handwritten_motion(category, instance, annotations_dir=args.object)
+    if args.shift:
+        motion = shifted_motion(motion, category, instance, args.shift, annotations_dir=args.object)
+    out = Path(args.out or f"out/film/{instance}_handwritten.png")
+    result = film_grasp(scenario, motion, out)
+    verdict = "functional" if result.functional_success else "grasped" if result.grasp_success else "failed"
+    print(f"wrote {out}: {verdict} ({result.failure_reason or 'ok'}{': ' + result.detail if result.detail else ''})")
+    return 0
+
+
 def _cmd_view(args) -> int:
     from catgrasp_drake.category_model import CategoryModel
     from catgrasp_drake.data.dataset import CATEGORIES
@@ -516,6 +565,21 @@ def build_parser() -> argparse.ArgumentParser:
     i.add_argument("--out", default=None, metavar="DIR",
                    help="output directory (default: out/objects/<category>/<name>)")
     i.set_defaults(func=_cmd_import_object)
+
+    f = sub.add_parser("film", help="film one grasp trial: a PNG strip of the station at the phases of the motion "
+                       "(the hand-written grasp on an object, or a benchmark record's trial again)")
+    f.add_argument("--category", default=None, help="drill, spray_bottle or mug (hand-written grasp)")
+    f.add_argument("--instance", default=None, help="embedded instance (default: the category's first)")
+    f.add_argument("--object", default=None, metavar="DIR", help="an imported object's directory")
+    f.add_argument("--seed", type=_int_at_least(0, MAX_SEED), default=None,
+                   help="seed of a random placement (default: the scenario's pose)")
+    f.add_argument("--shift", type=float, nargs=3, metavar=("DX", "DY", "DZ"), default=None,
+                   help="move the hand-written grasp by this much (m, object frame)")
+    f.add_argument("--record", default=None, metavar="FILE", help="a benchmark records file: film its --index trial")
+    f.add_argument("--index", type=_int_at_least(0), default=0, help="the record's position in --record (from 0)")
+    f.add_argument("--data", default="out/benchmark/data", help="where the benchmark's objects are generated")
+    f.add_argument("--out", default=None, help="PNG (default: out/film/<instance>_...png)")
+    f.set_defaults(func=_cmd_film)
 
     v = sub.add_parser("view", help="inspect a trained model's latent shape space in Meshcat (sliders)")
     v.add_argument("category")

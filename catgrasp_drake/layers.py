@@ -25,7 +25,8 @@ layer  units                       what they hold
                                    the motion planner (ports and calls only)
 8      trial, baselines            one simulated, judged grasp trial; the baselines as plain functions
 9      transfer, training          the transfer diagram; training a category model (trials as tasks)
-10     demo, evaluation            the demo; the paper's evaluation protocol
+10     demo, evaluation, film      the demo; the paper's evaluation protocol; a film of one trial
+                                   (frames at the phases of the motion)
 11     benchmark                   the held-out benchmark and its report
 12     cli                         the ``catgrasp`` command line
 =====  ==========================  =====================================================================
@@ -52,7 +53,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("systems", ("systems",)),
     ("trial", ("trial", "baselines")),
     ("jobs", ("transfer", "training")),
-    ("protocols", ("demo", "evaluation")),
+    ("protocols", ("demo", "evaluation", "film")),
     ("benchmark", ("benchmark",)),
     ("cli", ("cli",)),
 )

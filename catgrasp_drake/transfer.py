@@ -302,7 +302,7 @@ class TransferResult:
         return asdict(self)
 
 
-def run_transfer(td: TransferDiagram, *, record_html=None, return_context: bool = False):
+def run_transfer(td: TransferDiagram, *, record_html=None, return_context: bool = False, on_phase=None):
     """Perceive, estimate, regress, plan, execute and judge once (stage timings in ``timings``).
 
     Equivalent to simulating ``td.diagram`` from its default context (the
@@ -310,6 +310,8 @@ def run_transfer(td: TransferDiagram, *, record_html=None, return_context: bool 
     run explicitly first so that its time can be measured, then the
     simulation starts with initialization events suppressed. Returns the
     :class:`TransferResult` (and the final root context with ``return_context``).
+    ``on_phase(label, root_context)`` is called at the phases of the motion
+    (``catgrasp_drake.trial.simulate_and_judge``), e.g. to film it.
     """
     h = td.station
     timings = {}
@@ -345,7 +347,7 @@ def run_transfer(td: TransferDiagram, *, record_html=None, return_context: bool 
     t0 = time.perf_counter()
     verdict, _, _, sim_time = simulate_and_judge(
         td.diagram, context, h, plan.timeline, spec, meshcat=td.meshcat, record_html=record_html,
-        initialize_params=InitializeParams(suppress_initialization_events=True))
+        initialize_params=InitializeParams(suppress_initialization_events=True), on_phase=on_phase)
     timings["execute"] = time.perf_counter() - t0
     timings["simulated_s"] = sim_time
     timings["total"] = time.perf_counter() - t_all

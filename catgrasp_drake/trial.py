@@ -212,13 +212,15 @@ def pose_tuple(X: np.ndarray) -> tuple:
 
 
 def run_grasp_trial(scenario: Scenario, motion_O: GraspMotion, *, meshcat: Meshcat | None = None,
-                    record_html: str | Path | None = None, params: PlanParams = PlanParams()) -> TrialResult:
+                    record_html: str | Path | None = None, params: PlanParams = PlanParams(),
+                    on_phase=None) -> TrialResult:
     """Execute ``motion_O`` (hand control poses in the OBJECT frame) on the scenario's object.
 
     With ``meshcat`` the run is recorded on it (MeshcatVisualizer recording);
     with ``record_html`` as well, the recording is written there as one
-    self-contained HTML file. Returns a :class:`TrialResult`; never raises
-    for a failed grasp.
+    self-contained HTML file. ``on_phase(label, root_context)`` is called
+    at the phases of the motion (:func:`simulate_and_judge`). Returns a
+    :class:`TrialResult`; never raises for a failed grasp.
     """
     if not isinstance(motion_O, GraspMotion):
         raise InputError(f"motion_O: expected a GraspMotion, got {type(motion_O).__name__}")
@@ -256,7 +258,8 @@ def run_grasp_trial(scenario: Scenario, motion_O: GraspMotion, *, meshcat: Meshc
     context = td.diagram.CreateDefaultContext()
     td.generator.set_plan(td.generator.GetMyMutableContextFromRoot(context), plan)
     verdict, X_final, end, sim_time = simulate_and_judge(td.diagram, context, td.station, plan.timeline, spec,
-                                                         meshcat=meshcat, record_html=record_html)
+                                                         meshcat=meshcat, record_html=record_html,
+                                                         on_phase=on_phase)
     return result(verdict, X_final, end, sim_time)
 
 
@@ -267,9 +270,18 @@ def run_grasp_trial(scenario: Scenario, motion_O: GraspMotion, *, meshcat: Meshc
 MAX_TRIAL_WALL_S = 300.0
 
 
+def phase_instants(timeline) -> tuple[tuple[str, float], ...]:
+    """The instants a film of the trial shows, ``(label, t)`` in time order: the start of every phase of
+    the plan's ``timeline`` (``approach`` ... ``press``), the middle of the closing and the end."""
+    d = timeline.as_dict()
+    marks = [(name, float(t)) for name, t in d.items() if name != "settle"]
+    marks.append(("closing", 0.5 * (float(d["close"]) + float(d["lift"]))))
+    return tuple(sorted(marks, key=lambda m: m[1]))
+
+
 def simulate_and_judge(diagram, context, station: StationHandles, timeline, spec: JudgeSpec, *,
                        meshcat: Meshcat | None = None, record_html=None, initialize_params=None,
-                       max_wall_s: float = MAX_TRIAL_WALL_S):
+                       max_wall_s: float = MAX_TRIAL_WALL_S, on_phase=None):
     """Simulate ``diagram`` from ``context`` to ``timeline.end`` and judge the grasp.
 
     Snapshots are taken at the start, at ``timeline.close``, ``timeline.hold``
@@ -280,9 +292,21 @@ def simulate_and_judge(diagram, context, station: StationHandles, timeline, spec
     Meshcat visualizer the run is recorded (and written to ``record_html``).
     Past ``max_wall_s`` seconds of wall-clock time the run stops with a
     ``simulation_timeout`` verdict.
+    With ``on_phase`` (a callable ``on_phase(label, context)``) the run also
+    stops at every instant of :func:`phase_instants` and calls it there (a
+    film; the simulated motion is the same: the plant's updates are periodic).
     Returns ``(verdict, X_WO_final, end_snapshot or None, simulated_time_s)``.
     """
     simulator = Simulator(diagram, context)
+    instants = list(phase_instants(timeline)) if on_phase is not None else []
+
+    def advance_to(t: float) -> None:
+        while instants and instants[0][1] <= t:
+            label, t_mark = instants.pop(0)
+            simulator.AdvanceTo(max(t_mark, context.get_time()))
+            on_phase(label, context)
+        simulator.AdvanceTo(max(float(t), context.get_time()))
+
     simulator.set_target_realtime_rate(0.0)
     deadline = time.monotonic() + float(max_wall_s)
 
@@ -302,11 +326,13 @@ def simulate_and_judge(diagram, context, station: StationHandles, timeline, spec
         else:
             simulator.Initialize(initialize_params)
         initial = station_snapshot(station, context)
-        simulator.AdvanceTo(timeline.close)
+        if on_phase is not None:
+            on_phase("start", context)
+        advance_to(timeline.close)
         before_close = station_snapshot(station, context)
         snapshots = []
         for t in (timeline.hold, timeline.shake, timeline.press, timeline.end):
-            simulator.AdvanceTo(max(float(t), context.get_time()))
+            advance_to(t)
             snapshots.append(station_snapshot(station, context))
         after_lift, after_hold, after_shake, end = snapshots
     except RuntimeError as e:  # a solver failure inside the plant: report, never raise

@@ -53,20 +53,10 @@ def sweep_task(spec: dict) -> dict:
 
 
 def varied(motion, category: str, instance: str, shift_O, rotate_deg):
-    """``motion`` (object frame) turned by x-y-z Euler angles ``rotate_deg`` about the centre of the
-    grasp's anchor region (the trigger or handle), then moved by ``shift_O`` (m)."""
-    import numpy as np
-    from scipy.spatial.transform import Rotation
+    """``motion`` turned by ``rotate_deg`` about the functional region's centre, then moved by ``shift_O``."""
+    from catgrasp_drake.station.handwritten import shifted_motion
 
-    from catgrasp_drake.data.dataset import load_annotations
-    from catgrasp_drake.grasping.constraints import load_constraint
-    from catgrasp_drake.grasping.sampling import perturb_poses
-
-    pivot = np.asarray(load_annotations(category, instance)["regions"][load_constraint(category).region]["center"])
-    T = np.eye(4)
-    T[:3, :3] = Rotation.from_euler("xyz", rotate_deg, degrees=True).as_matrix()
-    T[:3, 3] = shift_O
-    return replace(motion, poses=perturb_poses(motion.poses, T, pivot))
+    return shifted_motion(motion, category, instance, shift_O, rotate_deg)
 
 
 def _fmt(value, width: int, digits: int, scale: float = 1.0) -> str:

@@ -365,3 +365,44 @@ def run_benchmark(config: BenchmarkConfig, *, model_paths: dict[str, str] | None
                 "detail": str(r.get("error", r))[:300], "timings": {}}
         records.append(r | {"code_version": version})
     return records
+
+
+# ----------------------------------------------------------------------------- one trial again
+def spec_from_record(record: dict, *, data_dir: str | Path = "out/benchmark/data", objects=()) -> dict:
+    """The task spec that made a benchmark ``record`` (split, object, placement, camera, method, physics).
+
+    The split's objects are generated or prepared again under ``data_dir``
+    if needed; an ``objects``-split record needs its directory in ``objects``.
+    """
+    from catgrasp_drake.data.dataset import INSTANCE_COUNTS
+
+    missing = [k for k in TRIAL_KEYS if k not in record]
+    if missing:
+        raise InputError(f"record: not a benchmark trial record (missing {', '.join(missing)})")
+    config = BenchmarkConfig(
+        split=record["split"], categories=(record["category"],), methods=(record["method"],),
+        views=(record["view"],), placements=int(record["trial"]) + 1, instances=(record["instance"],),
+        instances_per_category=max(INSTANCE_COUNTS.values()), objects=tuple(objects), seed=int(record["seed"]),
+        noise=bool(record["noise"]), physics=record["physics"], min_confidence=float(record["min_confidence"]),
+        data_dir=str(data_dir))
+    specs = [s for s in trial_specs(config) if s["trial"] == record["trial"]]
+    if len(specs) != 1:
+        raise InputError(f"record: no trial {record['trial']} of {record['instance']!r} in split {record['split']!r}"
+                         + (" (pass the imported object's directory)" if record["split"] == "objects" else ""))
+    return specs[0]
+
+
+def film_benchmark_trial(record: dict, path: str | Path, *, data_dir: str | Path = "out/benchmark/data",
+                         objects=()):
+    """Run the trial of a benchmark ``record`` again through the transfer diagram and film it into ``path``
+    (PNG, :mod:`catgrasp_drake.film`). Returns ``(TransferResult, spec)``; a model file that changed since
+    the record shows in ``spec["model_sha256"] != record["model_sha256"]``."""
+    from catgrasp_drake.film import film_transfer
+    from catgrasp_drake.transfer import make_transfer_diagram
+
+    spec = spec_from_record(record, data_dir=data_dir, objects=objects)
+    scenario, _, _ = trial_scenario(spec)
+    td = make_transfer_diagram(scenario, _model(spec["model"], spec["category"]), view=spec["view"],
+                               method=spec["method"], min_confidence=spec["min_confidence"])
+    title = f"{spec['instance']} trial {spec['trial']} {spec['method']} ({spec['view']} view)"
+    return film_transfer(td, path, title=title), spec

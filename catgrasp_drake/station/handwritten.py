@@ -23,14 +23,17 @@ instance of the category (the trigger moves from drill to drill).
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 import yaml
 
-from catgrasp_drake.data.dataset import load_annotations
+from catgrasp_drake.data.dataset import load_annotations, read_annotations
 from catgrasp_drake.errors import InputError, ModelFileError
+from catgrasp_drake.grasping.constraints import load_constraint
 from catgrasp_drake.grasping.motion import GraspMotion
+from catgrasp_drake.grasping.sampling import perturb_poses
 from catgrasp_drake.robot.models import HAND_ACTUATED_JOINTS, load_hand_postures
 
 GRASPS_DIR = Path(__file__).resolve().parents[2] / "models" / "grasps"
@@ -93,8 +96,18 @@ def motion_from_spec(spec: dict, annotations: dict | None = None, postures: dict
                        float(spec.get("lift_height", 0.12)), float(spec.get("hold_time", 2.0)))
 
 
-def load_handwritten_motion(category: str, instance: str, path: str | Path | None = None) -> GraspMotion:
-    """The hand-written grasp of ``category`` fitted to ``instance``'s annotations (object frame)."""
+def _annotations(category: str, instance: str, annotations_dir: str | Path | None) -> dict:
+    if annotations_dir is None:
+        return load_annotations(category, instance)
+    return read_annotations(Path(annotations_dir) / "annotations.json")
+
+
+def load_handwritten_motion(category: str, instance: str, path: str | Path | None = None, *,
+                            annotations_dir: str | Path | None = None) -> GraspMotion:
+    """The hand-written grasp of ``category`` fitted to ``instance``'s annotations (object frame).
+
+    ``annotations_dir``: an imported object's directory (its ``annotations.json``) instead of the
+    embedded data set's instance."""
     path = Path(path) if path is not None else GRASPS_DIR / f"{category}_handwritten.yaml"
     try:
         spec = yaml.safe_load(path.read_text())
@@ -104,4 +117,18 @@ def load_handwritten_motion(category: str, instance: str, path: str | Path | Non
         raise InputError(f"{path}: not valid YAML ({e})") from None
     if isinstance(spec, dict) and spec.get("category", category) != category:
         raise InputError(f"{path}: grasp for {spec.get('category')!r}, not {category!r}")
-    return motion_from_spec(spec, load_annotations(category, instance), where=str(path.name))
+    return motion_from_spec(spec, _annotations(category, instance, annotations_dir), where=str(path.name))
+
+
+def shifted_motion(motion: GraspMotion, category: str, instance: str, shift_O, rotate_deg=(0.0, 0.0, 0.0), *,
+                   annotations_dir: str | Path | None = None) -> GraspMotion:
+    """``motion`` (object frame) turned by x-y-z Euler angles ``rotate_deg`` (deg) about the centre of the
+    category's functional region on ``instance`` (the trigger or handle), then moved by ``shift_O`` (m, O)."""
+    from scipy.spatial.transform import Rotation
+
+    region = load_constraint(category).region
+    pivot = np.asarray(_annotations(category, instance, annotations_dir)["regions"][region]["center"], float)
+    T = np.eye(4)
+    T[:3, :3] = Rotation.from_euler("xyz", rotate_deg, degrees=True).as_matrix()
+    T[:3, 3] = np.asarray(shift_O, float)
+    return replace(motion, poses=perturb_poses(motion.poses, T, pivot))

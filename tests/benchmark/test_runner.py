@@ -147,6 +147,15 @@ def test_smoke_benchmark_runs_the_transfer_diagram_and_records_every_trial(tmp_p
     assert [r["grasp"] for r in again] == [r["grasp"] for r in records]
     assert [r["timings"] for r in again] == [r["timings"] for r in records]
 
+    # a record's trial filmed again (catgrasp film --record): the same trial, the same outcome
+    from catgrasp_drake.benchmark.runner import film_benchmark_trial
+
+    result, spec = film_benchmark_trial(records[0], tmp_path / "film.png", data_dir=tmp_path / "data")
+    assert (result.grasp_success, result.functional_success) == (records[0]["grasp"], records[0]["functional"])
+    assert spec["model_sha256"] == records[0]["model_sha256"] and (tmp_path / "film.png").stat().st_size > 1000
+    with pytest.raises(InputError, match="not a benchmark trial record"):
+        film_benchmark_trial({"instance": "drill_00"}, tmp_path / "x.png")
+
 
 def test_physics_settings_change_the_station_they_name():
     from pydrake.systems.framework import DiagramBuilder

@@ -1,0 +1,129 @@
+"""A film of one grasp trial: the station seen at the phases of the motion, one PNG strip.
+
+``film_grasp(scenario, motion_O, path)`` runs a grasp trial (the motion given
+in the object frame, planned around the true object) and
+``film_transfer(td, path)`` runs a transfer diagram (perception, estimate,
+prediction, plan); both stop at every instant of
+:func:`catgrasp_drake.trial.phase_instants` (approach, reach, close, the
+middle of the closing, lift, hold, shake, press, end) and render the scene
+there from two cameras aimed at the object's starting place, so a person sees
+at a glance where a grasp went wrong (pushed over on the way in, turned while
+closing, slipped while shaken). Each tile is labelled with the phase, the
+time, and the object's rise (cm) and tilt (deg) against its start; the title
+holds the verdict. The simulation is the same as without the film (the
+plant's updates are periodic; a test checks the outcome).
+
+Views (``FILM_VIEWS``): ``(name, azimuth_deg, elevation_deg)`` about the
+object's starting position, azimuth measured in the world from the
+direction of the arm's base seen from the object (so the arm does not hide
+the hand: "left" and "right" see the grasp in profile, "above" from high
+over the far side of the table), 0.7 m away, aimed 10 cm above the object's base.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from catgrasp_drake.core.visibility import camera_on_sphere_position
+from catgrasp_drake.errors import InputError
+from catgrasp_drake.planning.records import PlanParams
+from catgrasp_drake.station.builder import RENDERER_NAME, StationHandles
+from catgrasp_drake.trial import run_grasp_trial
+from catgrasp_drake.viz.render import contact_sheet, render_color
+
+#: (name, azimuth from the object-to-arm-base direction (deg), elevation (deg)).
+FILM_VIEWS: tuple[tuple[str, float, float], ...] = (("left", 90.0, 15.0), ("right", -90.0, 15.0),
+                                                   ("above", 180.0, 75.0))
+FILM_DISTANCE_M = 0.7
+FILM_TARGET_HEIGHT_M = 0.10
+FILM_FOV_DEG = 45.0
+
+
+@dataclass
+class Film:
+    """Collects the frames of one trial: ``film(label, root_context)`` renders every view."""
+
+    station: StationHandles
+    size: tuple[int, int] = (180, 180)
+    views: tuple[tuple[str, float, float], ...] = FILM_VIEWS
+    frames: list = field(default_factory=list)  # (label, t, rise_m, tilt_deg, [image per view])
+    _X_WO0: np.ndarray | None = None
+
+    def __call__(self, label: str, context) -> None:
+        h = self.station
+        plant_ctx = h.plant.GetMyContextFromRoot(context)
+        X_WO = h.plant.EvalBodyPoseInWorld(plant_ctx, h.object_body).GetAsMatrix4()
+        if self._X_WO0 is None:
+            self._X_WO0 = X_WO
+        X0 = self._X_WO0
+        rise = float(X_WO[2, 3] - X0[2, 3])
+        cos_tilt = float(np.clip(X_WO[:3, 2] @ X0[:3, 2], -1.0, 1.0))
+        query = h.scene_graph.get_query_output_port().Eval(h.scene_graph.GetMyContextFromRoot(context))
+        target = X0[:3, 3] + np.array([0.0, 0.0, FILM_TARGET_HEIGHT_M])
+        to_arm = h.scenario.arm_base.matrix()[:3, 3] - X0[:3, 3]
+        yaw0 = math.atan2(to_arm[1], to_arm[0])
+        images = []
+        for _, az, el in self.views:
+            eye = camera_on_sphere_position(target, FILM_DISTANCE_M, yaw0 + math.radians(az), math.radians(el))
+            images.append(render_color(query, h.scene_graph.world_frame_id(), eye, target, self.size, FILM_FOV_DEG,
+                                       renderer=RENDERER_NAME))
+        self.frames.append((label, float(context.get_time()), rise, math.degrees(math.acos(cos_tilt)), images))
+
+    def write(self, path: str | os.PathLike, title: str) -> None:
+        """One PNG: a column per phase, a row per view (atomic write)."""
+        if not self.frames:
+            raise InputError("film: no frames (the plan failed before the motion started?)")
+        images, labels = [], []
+        for v, (name, _, _) in enumerate(self.views):
+            for label, t, rise, tilt, frame in self.frames:
+                images.append(frame[v])
+                labels.append(f"{label} {t:.1f}s rise {100 * rise:.1f}cm tilt {tilt:.0f}deg"
+                              if v == 0 else f"{name} view")
+        contact_sheet(images, labels, path, columns=len(self.frames), title=title)
+
+
+def _title(what: str, result) -> str:
+    verdict = ("functional" if result.functional_success else "grasped, not functional" if result.grasp_success
+               else "failed")
+    reason = f" ({result.failure_reason}: {result.detail})" if result.failure_reason else ""
+    return f"{what}: {verdict}{reason}"[:240]
+
+
+def film_grasp(scenario, motion_O, path: str | os.PathLike, *, size: tuple[int, int] = (180, 180),
+               params: PlanParams = PlanParams()):
+    """Run ``motion_O`` (object frame) as :func:`catgrasp_drake.trial.run_grasp_trial` does, film it into
+    ``path`` (PNG) and return the :class:`~catgrasp_drake.trial.TrialResult`. A plan that fails writes
+    the start frame only, titled with the planner's reason."""
+    from catgrasp_drake.trial import trial_diagram
+
+    film = Film(trial_diagram(scenario).station, size=size)
+    result = run_grasp_trial(scenario, motion_O, params=params, on_phase=film)
+    name = f"{scenario.object.category or ''} {scenario.object.instance or scenario.name}".strip()
+    if not film.frames:
+        _film_start(film, scenario)
+    film.write(path, _title(name, result))
+    return result
+
+
+def _film_start(film: Film, scenario) -> None:
+    from catgrasp_drake.trial import trial_diagram
+
+    td = trial_diagram(scenario)
+    film("start (no motion)", td.diagram.CreateDefaultContext())
+
+
+def film_transfer(td, path: str | os.PathLike, *, size: tuple[int, int] = (180, 180), title: str = ""):
+    """Run the transfer diagram ``td`` (:func:`catgrasp_drake.transfer.run_transfer`), film it into ``path``
+    (PNG) and return the :class:`~catgrasp_drake.transfer.TransferResult`."""
+    from catgrasp_drake.transfer import run_transfer
+
+    film = Film(td.station, size=size)
+    result = run_transfer(td, on_phase=film)
+    if not film.frames:
+        film("start (no motion)", td.diagram.CreateDefaultContext())
+    film.write(path, _title(title or f"{td.model.category} {td.station.scenario.object.instance}", result))
+    return result

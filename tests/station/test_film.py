@@ -1,0 +1,52 @@
+"""The film of a trial: frames at the phases of the motion, and the same outcome as without it."""
+
+from __future__ import annotations
+
+import numpy as np
+from PIL import Image
+
+from catgrasp_drake.film import FILM_VIEWS, film_grasp
+from catgrasp_drake.station.handwritten import load_handwritten_motion, shifted_motion
+from catgrasp_drake.station.scenario import load_scenario, with_instance
+from catgrasp_drake.trial import phase_instants, run_grasp_trial
+
+
+def test_phase_instants_follow_the_timeline_and_add_the_middle_of_the_closing():
+    from catgrasp_drake.planning.records import Timeline
+
+    tl = Timeline(settle=0.0, approach=0.1, reach=2.0, close=2.8, lift=3.9, hold=4.9, shake=7.0, press=8.0, end=8.5)
+    labels = [label for label, _ in phase_instants(tl)]
+    assert labels == ["approach", "reach", "close", "closing", "lift", "hold", "shake", "press", "end"]
+    assert dict(phase_instants(tl))["closing"] == (2.8 + 3.9) / 2
+
+
+def test_a_film_shows_every_phase_in_every_view_and_does_not_change_the_trial(tmp_path):
+    scenario = with_instance(load_scenario("drill_default"), "drill_00")
+    motion = load_handwritten_motion("drill", "drill_00")
+    path = tmp_path / "film.png"
+    filmed = film_grasp(scenario, motion, path, size=(64, 48))
+    plain = run_grasp_trial(scenario, motion)
+    assert filmed.outcome() == plain.outcome()  # stopping to render changes nothing
+    assert filmed.functional_success  # the hand-written drill grasp (tests/station/test_handwritten_physics.py)
+    image = np.asarray(Image.open(path))
+    columns = 1 + len(phase_instants_of(scenario, motion))  # the start, then every phase
+    assert image.shape[1] == columns * 64
+    assert image.shape[0] > len(FILM_VIEWS) * 48
+    # the frames differ: the arm moves between the start and the end
+    start, end = image[24:24 + 48, :64], image[24:24 + 48, -64:]
+    assert np.abs(start.astype(int) - end.astype(int)).mean() > 5
+
+
+def phase_instants_of(scenario, motion):
+    from catgrasp_drake.trial import plan_for, trial_diagram
+
+    return phase_instants(plan_for(trial_diagram(scenario), motion.in_world(scenario.X_WO())).timeline)
+
+
+def test_a_grasp_that_cannot_be_planned_films_its_start_and_says_why(tmp_path):
+    scenario = with_instance(load_scenario("drill_default"), "drill_00")
+    motion = shifted_motion(load_handwritten_motion("drill", "drill_00"), "drill", "drill_00", (0.0, 0.0, 3.0))
+    path = tmp_path / "film.png"
+    result = film_grasp(scenario, motion, path, size=(64, 48))
+    assert not result.grasp_success and result.plan_status != "ok"
+    assert np.asarray(Image.open(path)).shape[1] == 64  # one frame: the start
