@@ -35,7 +35,14 @@ Yaw search: the object stands on a table (z up in the observation frame);
 ``yaw_candidates=n`` starts from n yaws about the model's vertical axis
 (``R = R0 rotz(yaw)``), each with centroid matching (of the visible part of
 the model), runs a short fit on a subsample of O, keeps the lowest energy and
-refines it to convergence on the full cloud.
+refines it to convergence on the full cloud. Pruned early: after
+``prune_iter`` = 2 iterations only the ``yaw_keep`` = 4 lowest energies go on
+(the kept starts' results are those of the unpruned search; accuracy
+against the unpruned search: benchmarks/bench_inference.py). The search's E-step runs in float32 while the
+rounding bound allows (:data:`SEARCH_F32_TOL`); in the refine, a scheduled
+visibility update is skipped while no model point has moved more than
+``visibility_move`` = 2 mm since the last (hidden-point removal is ~40 % of
+the fit's time otherwise). :data:`LEGACY_SEARCH` restores the earlier settings.
 
 Confidence (in [0, 1]): with ``tau`` = the mean nearest-neighbour spacing of
 the completed model, ``inlier = mean_n exp(-d(o_n, model)^2 / (2 tau^2))``
@@ -57,7 +64,14 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial import cKDTree
 
-from catgrasp_drake.core.cpd import estep, initial_sigma2, nonrigid_cpd, sigma2_update, weighted_procrustes
+from catgrasp_drake.core.cpd import (
+    estep,
+    exponent_bound,
+    initial_sigma2,
+    nonrigid_cpd,
+    sigma2_update,
+    weighted_procrustes,
+)
 from catgrasp_drake.core.deformation import deform_points, warp_poses
 from catgrasp_drake.core.kernels import kernel_width
 from catgrasp_drake.core.rotations import orthonormalize, rotz
@@ -77,8 +91,18 @@ from catgrasp_drake.core.visibility import DEFAULT_RADIUS_FACTOR, MAX_RADIUS_FAC
 from catgrasp_drake.errors import InputError
 
 SIGMA2_MIN_M2 = 1e-8  # (0.1 mm)^2
+_EPS32 = float(np.finfo(np.float32).eps)
 #: Most yaw starts of the search (one per 1 degree).
 MAX_YAW_CANDIDATES = 360
+#: The yaw search's E-step runs in float32 while the rounding bound of its exponents,
+#: ``8 eps32`` :func:`~catgrasp_drake.core.cpd.exponent_bound`, is at most this (relative error of a
+#: kernel value); float64 beyond. (The refine stays float64: float32 energies there stopped the
+#: tolerance test from firing, 28 -> 37 iterations on the camera's drills, measured.)
+SEARCH_F32_TOL = 1e-3
+#: The search and refine settings before the speed work of issue 17 (bench_transfer.py and
+#: bench_inference.py compare against them): every start searched to the end, two hidden-point removals
+#: per start, float64 throughout, the visibility recomputed on schedule however little the model moved.
+LEGACY_SEARCH = {"yaw_keep": None, "recenter_visibility": True, "search_float32": False, "visibility_move": 0.0}
 
 
 @dataclass(frozen=True, eq=False)
@@ -172,6 +196,7 @@ class _Problem:
         self.a = space.canonical + V0  # (M, 3)
         self.B = B  # (q, M, 3)
         self.Bf = np.ascontiguousarray(B.reshape(space.q, -1).T)  # (3M, q)
+        self.Bm = self.Bf.reshape(space.n_points, 3, space.q)  # (M, 3, q): a point's rows by fancy index
         self.M = space.n_points
         self.q = space.q
         self.O = O
@@ -198,23 +223,40 @@ class _Problem:
         return (math.log(self.w / (1.0 - self.w)) + math.log(n_vis) + 1.5 * math.log(2 * math.pi * sigma2)
                 - self.log_volume)
 
-    def run(self, st: _State, O, n_iter, tol, vis_every=1, pool=None):
-        """EM iterations from state ``st`` on observation subset O."""
+    def run(self, st: _State, O, n_iter, tol, vis_every=1, pool=None, k_start=0, float32=False, vis_move=0.0):
+        """EM iterations ``k_start .. n_iter - 1`` from state ``st`` on observation subset O.
+
+        ``k_start`` > 0 resumes a run stopped after ``k_start`` iterations (the
+        visibility schedule continues; with ``tol`` 0 the result is that of one
+        uninterrupted run). ``float32``: the E-step in float32 while
+        :data:`SEARCH_F32_TOL` allows. ``vis_move`` (m) > 0: a scheduled
+        visibility update is skipped while no model point has moved more than
+        that since the last one.
+        """
         N = len(O)
         Y = self.model(st.x)
         T = st.s * Y @ st.R.T + st.t
         vis = st.visible if st.visible is not None else self.visible(T)
+        T_vis = T
+        if float32:
+            ctr = O.mean(axis=0)
+            Oc = O - ctr
         e_prev = math.inf
-        for k in range(n_iter):
+        for k in range(k_start, n_iter):
             if k > 0 and vis_every and k % vis_every == 0:
-                vis = self.visible(T)
+                if not (vis_move > 0.0 and float(np.abs(T - T_vis).max()) < vis_move):
+                    vis = self.visible(T)
+                    T_vis = T
             idx = np.flatnonzero(vis)
             if len(idx) < 3:
                 vis = np.ones(self.M, dtype=bool)
                 idx = np.arange(self.M)
             Tv = T[idx]
+            dtype = np.float64
+            if float32 and 8.0 * _EPS32 * exponent_bound(Tv - ctr, Oc, st.sigma2) <= SEARCH_F32_TOL:
+                dtype = np.float32
             e = estep(Tv, O, st.sigma2, self.w, log_uniform=self.log_uniform(len(idx), st.sigma2),
-                      pool=pool if len(idx) * N >= 100_000 else None)
+                      pool=pool if len(idx) * N >= 100_000 else None, dtype=dtype)
             energy = e.nll + 0.5 * self.prior * float(st.x @ st.x)
             st.energy = energy
             if abs(e_prev - energy) / N < tol:
@@ -237,11 +279,10 @@ class _Problem:
             # latent x given pose: (s^2/sigma2 H + prior I) x = s^2/sigma2 g
             if self.q > 0:
                 P1 = e.P1
-                Bv = self.B[:, idx, :]  # (q, m, 3)
-                BP = Bv * P1[None, :, None]
-                H = np.tensordot(BP, Bv, axes=([1, 2], [1, 2]))
+                Bv = self.Bm[idx].reshape(-1, self.q)  # (3m, q), rows point-major
+                H = Bv.T @ (Bv * np.repeat(P1, 3)[:, None])
                 Z = (e.PX - P1[:, None] * t) @ R / s  # = P1 * z  (model frame)
-                g = np.tensordot(Bv, Z - P1[:, None] * self.a[idx], axes=([1, 2], [0, 1]))
+                g = Bv.T @ (Z - P1[:, None] * self.a[idx]).reshape(-1)
                 c = s * s / st.sigma2
                 A = c * H + self.prior * np.eye(self.q)
                 try:
@@ -303,6 +344,16 @@ def _subsample(O, n_max):
     return O[(np.arange(n_max) * step).astype(int)]
 
 
+def model_spacing(space: ShapeSpace) -> float:
+    """Mean nearest-neighbour distance (m) of the space's canonical points (its point spacing)."""
+    if not isinstance(space, ShapeSpace):
+        raise InputError(f"space: expected a ShapeSpace, got {type(space).__name__}")
+    if space.n_points < 2:
+        return 0.0
+    d, _ = cKDTree(space.canonical).query(space.canonical, k=2)
+    return float(d[:, 1].mean())
+
+
 def _confidence(completed, visible, O):
     d_model, _ = cKDTree(completed).query(completed, k=2)
     tau = max(float(d_model[:, 1].mean()), 1e-6)
@@ -329,6 +380,11 @@ def infer_latent_pose(
     scale_bounds: tuple[float, float] = (0.5, 2.0),
     search_iter: int = 12,
     search_points: int = 250,
+    yaw_keep: int | None = 4,
+    prune_iter: int = 2,
+    recenter_visibility: bool = False,
+    search_float32: bool = True,
+    visibility_move: float = 2e-3,
     max_points: int = 600,
     visibility_every: int = 4,
     radius_factor: float = DEFAULT_RADIUS_FACTOR,
@@ -354,7 +410,15 @@ def infer_latent_pose(
     bench_inference.py); the confidence uses every point; ``sigma2_init`` caps
     the initial variance (m^2; default: the data estimate -- a 2 cm cap cost
     0.5 mm of unseen-part error on the drills); ``visibility_every``: hidden
-    points are recomputed every that many iterations. ``residual_cpd`` adds a
+    points are recomputed every that many iterations (in the refine, not while
+    no model point moved more than ``visibility_move`` m since the last time;
+    0 = always). ``yaw_keep`` (None = all) starts survive ``prune_iter``
+    iterations of the search; the rest stop there (``start_energies`` in the
+    diagnostics then mixes energies after ``prune_iter`` and ``search_iter``
+    iterations). ``recenter_visibility``: recompute each start's visible part
+    after its centroid matching (one more hidden-point removal per start).
+    ``search_float32``: the search's E-step in float32 where accurate enough
+    (:data:`SEARCH_F32_TOL`). ``residual_cpd`` adds a
     non-rigid CPD (kernel ``residual_beta``, default the space's beta) from the
     visible completed points to O after the fit and moves the visible points
     only (visible surface detail; applied to the hidden points through its
@@ -380,6 +444,13 @@ def infer_latent_pose(
     tol = non_negative(tol, "tol")
     search_iter = count(search_iter, "search_iter", 1)
     search_points = count(search_points, "search_points", 3)
+    if yaw_keep is not None:
+        yaw_keep = count(yaw_keep, "yaw_keep", 1, MAX_YAW_CANDIDATES)
+    prune_iter = count(prune_iter, "prune_iter", 1)
+    visibility_move = non_negative(visibility_move, "visibility_move")
+    for name, flag in (("recenter_visibility", recenter_visibility), ("search_float32", search_float32)):
+        if not isinstance(flag, (bool, np.bool_)):
+            raise InputError(f"{name}: expected True or False, got {flag!r}")
     max_points = count(max_points, "max_points", 3)
     visibility_every = count(visibility_every, "visibility_every", 0)
     radius_factor = positive(radius_factor, "radius_factor")
@@ -395,8 +466,8 @@ def infer_latent_pose(
 
     with single_threaded_blas():
         x0 = np.zeros(space.q)
-        Y0 = prob.model(x0)
         c_obs = O.mean(axis=0)
+        Y0 = prob.model(x0)
 
         def start(yaw):
             R = R0 @ rotz(yaw)
@@ -408,7 +479,8 @@ def infer_latent_pose(
                     vis = prob.visible(s0 * Y0 @ R.T + t)
                     t = c_obs - s0 * R @ Y0[vis].mean(axis=0)
             T = s0 * Y0 @ R.T + t
-            vis = prob.visible(T)
+            if camera is None or recenter_visibility or (t0_given is not None and yaw_candidates is None):
+                vis = prob.visible(T)  # (else: the part matched above; the search updates it on schedule)
             s2 = max(initial_sigma2(T[vis], O), SIGMA2_MIN_M2)
             if sigma2_init is not None:
                 s2 = min(s2, sigma2_init)
@@ -418,10 +490,19 @@ def infer_latent_pose(
         start_energies = []
         if len(yaws) > 1:
             O_sub = _subsample(O, search_points)
+            vis_every = max(1, 2 * visibility_every)
+            k_prune = search_iter if yaw_keep is None or yaw_keep >= len(yaws) else min(prune_iter, search_iter)
+            f32 = bool(search_float32)
+            states = [prob.run(start(yaw), O_sub, k_prune, 0.0, vis_every=vis_every, float32=f32) for yaw in yaws]
+            start_energies = [st.energy for st in states]
+            if k_prune < search_iter:  # only the yaw_keep lowest energies go on (stable order: ties keep the first)
+                kept = sorted(np.argsort(start_energies, kind="stable")[:yaw_keep])
+                for i in kept:
+                    prob.run(states[i], O_sub, search_iter, 0.0, vis_every=vis_every, k_start=k_prune, float32=f32)
+                    start_energies[i] = states[i].energy
+                states = [states[i] for i in kept]
             best = None
-            for yaw in yaws:
-                st = prob.run(start(yaw), O_sub, search_iter, 0.0, vis_every=max(1, 2 * visibility_every))
-                start_energies.append(st.energy)
+            for st in states:
                 if best is None or st.energy < best.energy:
                     best = st
             best.iterations = 0
@@ -435,7 +516,8 @@ def infer_latent_pose(
         # a pool even on one core: whether the E-step is split into blocks must not depend on the machine
         pool = ThreadPoolExecutor(n_threads())
         try:
-            st = prob.run(best, O_fit, max_iter, tol, vis_every=visibility_every, pool=pool)
+            st = prob.run(best, O_fit, max_iter, tol, vis_every=visibility_every, pool=pool,
+                          vis_move=visibility_move)
         finally:
             if pool is not None:
                 pool.shutdown()
@@ -465,6 +547,7 @@ def infer_latent_pose(
         "start_energies": [float(e) for e in start_energies],
         "latent_norm": float(np.linalg.norm(st.x)),
         "n_visible": int(vis.sum()),
+        "n_observed": int(len(O)),
     }
     return InferenceResult(
         x=st.x.copy(),
