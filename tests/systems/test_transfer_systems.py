@@ -163,3 +163,33 @@ def test_regressor_output_is_cached_across_time(model, space):
     first = reg.GetOutputPort("grasp_motion_W").Eval(sub)
     ctx.SetTime(3.0)
     assert reg.GetOutputPort("grasp_motion_W").Eval(sub) is first
+
+
+def test_fit_voxel_grid_is_matched_to_the_model_and_selectable(space):
+    from catgrasp_drake.core.inference import LEGACY_SEARCH, model_spacing
+    from catgrasp_drake.errors import InputError
+    from catgrasp_drake.perception.object_cloud import voxel_grid
+    from catgrasp_drake.systems.shape_estimator import AUTO_VOXEL_FACTOR, fit_voxel_size
+
+    assert fit_voxel_size(space) == pytest.approx(AUTO_VOXEL_FACTOR * model_spacing(space))
+    assert fit_voxel_size(space, None) == 0.0 and fit_voxel_size(space, 0.004) == 0.004
+    for bad in ("fine", -0.01, 5.0, float("nan")):
+        with pytest.raises(InputError):
+            fit_voxel_size(space, bad)
+    P_W, vis, cam_W = _observation(space, space.latent_train[2], 0.3, np.array([0.01, 0.0, 0.0]))
+    dense = np.vstack([P_W[vis], P_W[vis] + 1e-3])  # twice the points, 1 mm apart
+    v = fit_voxel_size(space)
+    auto = estimate_on_table(space, dense, X_WT, camera_W=cam_W, yaw_candidates=[0.3])
+    # the same as voxelising the cloud in the table frame by hand and fitting it as given
+    R, p = X_WT[:3, :3], X_WT[:3, 3]
+    by_hand = voxel_grid((dense - p) @ R, v) @ R.T + p
+    given = estimate_on_table(space, by_hand, X_WT, camera_W=cam_W, yaw_candidates=[0.3], voxel_size=None)
+    np.testing.assert_allclose(auto.X_WO, given.X_WO, atol=1e-9)
+    np.testing.assert_allclose(auto.x, given.x, atol=1e-7)
+    assert auto.result.diagnostics["n_observed"] < len(dense)
+    assert len(auto.observed_W) == len(dense)  # the estimate keeps the cloud as given
+    # the old settings stay selectable
+    old = LatentShapeEstimator(space, X_WT, yaw_candidates=[0.3], voxel_size=None, **LEGACY_SEARCH)
+    ctx = _estimator_context(old, dense, cam_W)
+    e = old.estimate_now(ctx)
+    assert e.ok and e.result.diagnostics["n_observed"] == len(dense)
