@@ -8,7 +8,10 @@ A shape space from 10 real drills (canonical ~500 points, 95 % variance); the
 
 each moved by a seeded yaw <= 15 deg and shift <= 2 cm. Timed: known yaw (one
 start, centroid matching) and unknown yaw (8 and 12 starts). Median and 90th
-percentile over all runs; the paper reports ~7 s per inference.
+percentile over all runs; the paper reports ~7 s per inference. Rows marked
+"(old search)" use ``core.inference.LEGACY_SEARCH`` (the search before issue
+17: no pruning, two hidden-point removals per start, float64, no visibility
+skip) on the same observations, for comparison with the defaults.
 
 Also: the paper's optimiser (gradient descent on eq. 15) as L-BFGS with
 analytic gradients over (x, rotation vector, t, log s), sigma annealed
@@ -36,7 +39,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_real_drills import chamfer, load_drills, make_views  # noqa: E402
 
 from catgrasp_drake.core.cpd import initial_sigma2  # noqa: E402
-from catgrasp_drake.core.inference import infer_latent_pose  # noqa: E402
+from catgrasp_drake.core.inference import LEGACY_SEARCH, infer_latent_pose  # noqa: E402
 from catgrasp_drake.core.shape_space import build_shape_space  # noqa: E402
 from catgrasp_drake.core.threads import single_threaded_blas  # noqa: E402
 
@@ -124,20 +127,21 @@ def main(argv=None):
           "speed-up vs paper's ~7 s |")
     print("|---|---|---|---|---|---|---|")
     infer_latent_pose(space, full[0]["obs"])  # warm-up (kernel, caches)
+    old = {"(old search) ": LEGACY_SEARCH, "": {}}
     cases = [
-        ("full view, known yaw", full, None, False),
-        ("full view x2 (1 mm jitter), known yaw", full1000, None, False),
-        ("single view + camera, known yaw", partial, None, True),
-        ("full view x2, unknown yaw", full1000, 8, False),
-        ("single view + camera, unknown yaw", partial, 8, True),
-        ("single view + camera, unknown yaw", partial, 12, True),
+        ("full view, known yaw", full, None, False, {}),
+        ("full view x2 (1 mm jitter), known yaw", full1000, None, False, {}),
+        *[(f"{o}single view + camera, known yaw", partial, None, True, kw) for o, kw in old.items()],
+        *[(f"{o}full view x2, unknown yaw", full1000, 8, False, kw) for o, kw in old.items()],
+        *[(f"{o}single view + camera, unknown yaw", partial, 8, True, kw) for o, kw in old.items()],
+        *[(f"{o}single view + camera, unknown yaw", partial, 12, True, kw) for o, kw in old.items()],
     ]
-    for name, vs, yaws, use_cam in cases:
+    for name, vs, yaws, use_cam, kw in cases:
         ts, errs = [], []
         for v in vs:
             t0 = time.perf_counter()
             r = infer_latent_pose(space, v["obs"], camera_position=v["camera"] if use_cam else None,
-                                  yaw_candidates=yaws)
+                                  yaw_candidates=yaws, **kw)
             ts.append(time.perf_counter() - t0)
             errs.append(chamfer(r.completed, v["gt"]) * 1e3)
         n_obs = int(np.median([len(v["obs"]) for v in vs]))
