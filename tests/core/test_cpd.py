@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from catgrasp_drake.core import cpd
 from catgrasp_drake.core.cpd import CPDIteration, joint_normalization, nonrigid_cpd, rigid_cpd
 from catgrasp_drake.core.kernels import gaussian_kernel, low_rank_kernel
 from catgrasp_drake.errors import InputError
@@ -149,3 +150,138 @@ def test_bad_parameters():
                       ({"low_rank": "many"}, "low_rank")]:
         with pytest.raises(InputError, match=match):
             nonrigid_cpd(Y, Y, **kw)
+
+
+# --------------------------------------------------------------------------- truncated and float32 E-steps
+
+
+def _estep_problem(seed=5, n=600, far=True):
+    """A deformed volume cloud as targets of a moved source (normalised units, ~unit size), plus one far target."""
+    rng = np.random.default_rng(seed)
+    Y = rng.uniform(-1.0, 1.0, size=(n, 3)) * [0.5, 1.0, 1.5]
+    X = Y + 0.05 * np.sin(2.0 * Y) + rng.normal(scale=0.01, size=Y.shape)
+    if far:
+        X = np.vstack([X, [[0.0, 0.0, 3.0]]])  # a target with no source within 9 sigma: computed exactly
+    return Y, X
+
+
+def _l1_bound(X):
+    """|dP1|_1, |dPt1|_inf, |dPX|_inf allowed by TRUNCATION_RTOL (each posterior column within 2 rtol in L1),
+    with room for the dense reference's own rounding."""
+    N = len(X)
+    r = 2.0 * cpd.TRUNCATION_RTOL
+    return N * r + 1e-10, r + 1e-12, N * r * float(np.abs(X).max()) + 1e-10
+
+
+@pytest.mark.parametrize("w", [0.0, 0.1])
+def test_truncated_estep_equals_the_dense_one_within_its_bound(w):
+    Y, X = _estep_problem()
+    sigma2 = 0.02**2  # 9 sigma = 0.18: ~0.4 % of the pairs
+    e_step = cpd.TruncatedEStep(X, w)
+    got = e_step(Y, sigma2)
+    assert e_step.mode == "sparse"
+    ref = cpd.estep(Y, X, sigma2, w)
+    b_p1, b_pt1, b_px = _l1_bound(X)
+    assert np.abs(got.P1 - ref.P1).sum() <= b_p1
+    assert np.abs(got.Pt1 - ref.Pt1).max() <= b_pt1
+    assert np.abs(got.PX - ref.PX).max() <= b_px
+    assert abs(got.Np - ref.Np) <= b_p1
+    assert abs(got.nll - ref.nll) <= len(X) * 2 * cpd.TRUNCATION_RTOL + 1e-9 * abs(ref.nll)
+    # the far target keeps its exact (tiny) posterior mass, computed in the log domain
+    assert got.Pt1[-1] == pytest.approx(ref.Pt1[-1], rel=1e-9, abs=1e-300)
+
+
+def test_truncated_estep_is_the_dense_one_while_sigma_is_large():
+    Y, X = _estep_problem(far=False)
+    e_step = cpd.TruncatedEStep(X, 0.05)
+    got = e_step(Y, 0.3**2)  # 9 sigma spans the cloud: every pair counts
+    assert e_step.mode == "dense"
+    ref = cpd.estep(Y, X, 0.3**2, 0.05)
+    assert np.array_equal(got.PX, ref.PX) and np.array_equal(got.P1, ref.P1) and got.nll == ref.nll
+
+
+def test_float32_estep_within_its_stated_bound():
+    Y, X = _estep_problem(far=False, n=400)
+    for sigma2 in (0.3**2, 0.1**2):
+        ref = cpd.estep(Y, X, sigma2, 0.05)
+        got = cpd.estep(Y, X, sigma2, 0.05, dtype=np.float32)
+        ctr = X.mean(0)
+        bound = 8 * cpd._EPS32 * cpd.exponent_bound(Y - ctr, X - ctr, sigma2)
+        # kernel values within exp(bound) - 1, plus float32 sums of M terms
+        rel = 2.0 * bound + 2.0 * len(Y) * cpd._EPS32
+        assert np.abs(got.P1 - ref.P1).max() <= rel * ref.P1.max()
+        assert np.abs(got.PX - ref.PX).max() <= rel * np.abs(ref.PX).max()
+        assert np.abs(got.Pt1 - ref.Pt1).max() <= rel
+    e_step = cpd.TruncatedEStep(X, 0.05, fast=True)
+    e_step(Y, 0.3**2)
+    assert e_step.mode == "dense32"
+
+
+def test_every_e_step_recovers_a_known_deformation_and_agrees():
+    rng = np.random.default_rng(0)
+    Y = rng.uniform([-0.03, -0.06, 0.0], [0.03, 0.06, 0.18], size=(500, 3))
+    X = _smooth_warp(Y, rng, beta=0.05, amp=0.01)
+    disp = np.sqrt(((X - Y) ** 2).sum(1).mean())
+    modes = []
+    orig = cpd.TruncatedEStep.__call__
+
+    def spy(self, T, s2):
+        out = orig(self, T, s2)
+        modes.append(self.mode)
+        return out
+
+    results = {}
+    for e_step in cpd.E_STEPS:
+        cpd.TruncatedEStep.__call__ = spy
+        try:
+            results[e_step] = nonrigid_cpd(Y, X, beta=0.05, lam=1.0, max_iter=300, tol=1e-8, e_step=e_step,
+                                           low_rank="auto")
+        finally:
+            cpd.TruncatedEStep.__call__ = orig
+        rms = np.sqrt(((results[e_step].transformed - X) ** 2).sum(1).mean())
+        assert rms < 2e-3 * disp, (e_step, rms, disp)
+    assert {"sparse", "dense", "dense32"} <= set(modes)  # every path of the truncated E-step was used
+    ex = results["exact"].transformed
+    assert np.abs(results["truncated"].transformed - ex).max() < 1e-9  # m
+    assert np.abs(results["fast"].transformed - ex).max() < 1e-5 * disp
+
+
+@pytest.mark.parametrize("e_step", ["truncated", "fast"])
+def test_new_e_steps_are_identical_for_any_thread_count(monkeypatch, e_step):
+    Y, X = _estep_problem(far=False)
+
+    def run(n):
+        monkeypatch.setattr(cpd, "n_threads", lambda: n)
+        r = nonrigid_cpd(Y * 0.05, X * 0.05, beta=0.05, lam=3.0, max_iter=40, low_rank="auto", e_step=e_step)
+        return r.W, r.sigma2
+
+    W1, s1 = run(1)
+    W2, s2 = run(3)
+    assert np.array_equal(W1, W2) and s1 == s2
+
+
+def test_bad_e_step():
+    Y = blob((0.03, 0.06, 0.09, 0.0, 0.0), 50)
+    for bad in ("dense", None, 3):
+        with pytest.raises(InputError, match="e_step") as ei:
+            nonrigid_cpd(Y, Y, e_step=bad)
+        assert "\n" not in str(ei.value)
+
+
+def test_low_rank_kernel_threads_and_storage_change_no_bit():
+    from concurrent.futures import ThreadPoolExecutor
+
+    from catgrasp_drake.core import kernels
+
+    Y = np.random.default_rng(3).uniform(-1, 1, size=(700, 3))
+    ref = kernels.low_rank_kernel(Y, 0.7, "auto")
+    with ThreadPoolExecutor(3) as pool:
+        threaded = kernels.low_rank_kernel(Y, 0.7, "auto", pool=pool)
+    stored_before = kernels.KERNEL_STORE_ELEMENTS
+    try:
+        kernels.KERNEL_STORE_ELEMENTS = 0  # recompute every block
+        recomputed = kernels.low_rank_kernel(Y, 0.7, "auto")
+    finally:
+        kernels.KERNEL_STORE_ELEMENTS = stored_before
+    for other in (threaded, recomputed):
+        assert np.array_equal(other[0], ref[0]) and np.array_equal(other[1], ref[1]) and other[2] == ref[2]
