@@ -404,6 +404,49 @@ def _cmd_film(args) -> int:
     return 0
 
 
+def _cmd_search_grasp(args) -> int:
+    import json
+
+    import yaml
+
+    from catgrasp_drake.core.fileio import atomic_write_text
+    from catgrasp_drake.grasp_search import Robustness, apply_variation_to_spec, search_grasp
+    from catgrasp_drake.grasping.search import CemParams
+    from catgrasp_drake.robot.models import load_hand_postures
+    from catgrasp_drake.station.handwritten import GRASPS_DIR
+    from catgrasp_drake.station.variation import VARIATION_NAMES, VARIATION_SCALE
+
+    instances = _check_category(args.category)
+    chosen = args.instances or instances[::2]
+    _check_instances(args.category, chosen)
+    std = VARIATION_SCALE.copy()
+    for name in args.freeze or ():
+        if name not in VARIATION_NAMES:
+            raise InputError(f"--freeze: unknown parameter {name!r}; known: {', '.join(VARIATION_NAMES)}")
+        std[VARIATION_NAMES.index(name)] = 0.0
+    grasp_file = Path(args.grasp or GRASPS_DIR / f"{args.category}_handwritten.yaml")
+    bar = _Progress()
+    total = args.rounds
+    result = search_grasp(args.category, chosen, cem=CemParams(rounds=args.rounds, population=args.population,
+                                                                 elite=args.elite, seed=args.seed),
+                          robustness=Robustness(perturbations=args.perturbations, seed=args.seed), search_std=std,
+                          grasp_file=str(grasp_file), cache_dir=args.cache, workers=args.workers, ray=args.ray,
+                          progress=lambda k, X, s: bar(f"rounds (best so far {max(s):.2f})", k + 1, total))
+    out = Path(args.out or f"out/grasp_search/{args.category}")
+    spec = yaml.safe_load(grasp_file.read_text())
+    new = apply_variation_to_spec(spec, result.best, args.category, load_hand_postures(spec.get("postures",
+                                                                                                args.category)))
+    atomic_write_text(out / "search.json", json.dumps(result.to_dict(), indent=1) + "\n")
+    header = (f"# Searched by `catgrasp search-grasp --category {args.category}` from {grasp_file.name}: "
+              f"robustness {result.start_score:.2f} -> {result.best_score:.2f} on {len(chosen)} instances x "
+              f"{args.perturbations} perturbations ({result.trials} trials).\n")
+    atomic_write_text(out / grasp_file.name, header + yaml.safe_dump(new, sort_keys=False, default_flow_style=None))
+    print(f"robustness {result.start_score:.2f} (as written) -> {result.best_score:.2f}; best variation "
+          f"{ {k: v for k, v in result.best.items() if v} }; {result.trials} trials in {result.wall_s:.0f} s")
+    print(f"wrote {out / 'search.json'} and {out / grasp_file.name} (review, then copy over {grasp_file})")
+    return 0
+
+
 def _cmd_view(args) -> int:
     from catgrasp_drake.category_model import CategoryModel
     from catgrasp_drake.data.dataset import CATEGORIES
@@ -580,6 +623,27 @@ def build_parser() -> argparse.ArgumentParser:
     f.add_argument("--data", default="out/benchmark/data", help="where the benchmark's objects are generated")
     f.add_argument("--out", default=None, help="PNG (default: out/film/<instance>_...png)")
     f.set_defaults(func=_cmd_film)
+
+    g = sub.add_parser("search-grasp", help="search the category's hand-written grasp for robustness (cross-entropy "
+                       "over pose and finger variations, scored by perturbed simulated trials)")
+    g.add_argument("--category", required=True, help="drill, spray_bottle or mug")
+    g.add_argument("--instances", nargs="+", default=None,
+                   help="committed instances to search on (default: every other one; the rest stay for checking)")
+    g.add_argument("--grasp", default=None,
+                   help="the grasp file to start from (default: models/grasps/<category>_handwritten.yaml)")
+    g.add_argument("--rounds", type=_int_at_least(1, 50), default=3)
+    g.add_argument("--population", type=_int_at_least(2, 200), default=10)
+    g.add_argument("--elite", type=_int_at_least(1, 200), default=3)
+    g.add_argument("--perturbations", type=_int_at_least(1, 50), default=1,
+                   help="trials per instance and candidate (the first at the nominal placement)")
+    g.add_argument("--freeze", nargs="+", default=None, help="variation parameters kept at 0 (e.g. dx dy dz)")
+    g.add_argument("--seed", type=_int_at_least(0, MAX_SEED), default=0)
+    g.add_argument("--cache", default="out/grasp_search/cache", help="trial cache (resumes an interrupted search)")
+    g.add_argument("--workers", type=_int_at_least(0, MAX_WORKERS), default=None)
+    g.add_argument("--ray", default=None, help="run trials on a Ray cluster: 'auto', 'local' or the head's address")
+    g.add_argument("--out", default=None, help="directory of the record and the new grasp file "
+                   "(default: out/grasp_search/<category>)")
+    g.set_defaults(func=_cmd_search_grasp)
 
     v = sub.add_parser("view", help="inspect a trained model's latent shape space in Meshcat (sliders)")
     v.add_argument("category")

@@ -24,7 +24,8 @@ layer  units                       what they hold
 7      systems                     LeafSystems of the transfer: estimator, predictors, plan playback and
                                    the motion planner (ports and calls only)
 8      trial, baselines            one simulated, judged grasp trial; the baselines as plain functions
-9      transfer, training          the transfer diagram; training a category model (trials as tasks)
+9      transfer, training,         the transfer diagram; training a category model (trials as tasks);
+       grasp_search                the robustness search of a category's grasp
 10     demo, evaluation, film      the demo; the paper's evaluation protocol; a film of one trial
                                    (frames at the phases of the motion)
 11     benchmark                   the held-out benchmark and its report
@@ -52,7 +53,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("planning", ("planning",)),
     ("systems", ("systems",)),
     ("trial", ("trial", "baselines")),
-    ("jobs", ("transfer", "training")),
+    ("jobs", ("transfer", "training", "grasp_search")),
     ("protocols", ("demo", "evaluation", "film")),
     ("benchmark", ("benchmark",)),
     ("cli", ("cli",)),

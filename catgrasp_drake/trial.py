@@ -32,7 +32,7 @@ from catgrasp_drake.grasping.motion import GraspMotion
 from catgrasp_drake.planning.model import PlanningModel
 from catgrasp_drake.planning.records import GraspPlan, PlanParams, hold_plan
 from catgrasp_drake.robot.models import HAND_BASE_LINK, INDEX_DISTAL_LINK, load_hand_postures
-from catgrasp_drake.station.builder import StationHandles, add_station, posture_category
+from catgrasp_drake.station.builder import StationHandles, add_station, apply_context_knobs, posture_category
 from catgrasp_drake.station.judge import ContactRecord, JudgeSpec, Snapshot, Verdict, judge
 from catgrasp_drake.station.scenario import Scenario
 from catgrasp_drake.systems.grasp_execution import PlanPlayback
@@ -297,6 +297,7 @@ def simulate_and_judge(diagram, context, station: StationHandles, timeline, spec
     film; the simulated motion is the same: the plant's updates are periodic).
     Returns ``(verdict, X_WO_final, end_snapshot or None, simulated_time_s)``.
     """
+    apply_context_knobs(station, context)
     simulator = Simulator(diagram, context)
     instants = list(phase_instants(timeline)) if on_phase is not None else []
 

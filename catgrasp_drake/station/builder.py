@@ -230,6 +230,16 @@ def _apply_physics_knobs(plant: MultibodyPlant, scene_graph: SceneGraph, scenari
         _replace_proximity(plant, scene_graph, hand, coarser)
 
 
+def apply_context_knobs(h: "StationHandles", root_context) -> None:
+    """Apply the scenario's context-level physics knobs to a root ``context`` of a diagram holding ``h``:
+    ``PlantSpec.object_mass_scale`` (the object's mass times the factor; its unit inertia, hence its
+    shape of inertia and centre of mass, unchanged). A no-op at the defaults."""
+    k = h.scenario.plant.object_mass_scale
+    if k != 1.0:
+        plant_ctx = h.plant.GetMyMutableContextFromRoot(root_context)
+        h.object_body.SetMass(plant_ctx, h.object_body.default_mass() * k)
+
+
 def _replace_proximity(plant: MultibodyPlant, scene_graph: SceneGraph, instance, update) -> None:
     """Re-assign every collision geometry of ``instance`` with its proximity properties passed through
     ``update(props)`` (which edits the copy in place)."""

@@ -184,6 +184,9 @@ class PlantSpec:
     #: Speed lever (issue 17): the hand's compliant-hydroelastic mesh resolution hint (m) replaced
     #: (None: the model's 6 mm); coarser tessellations mean fewer contact polygons for SAP.
     hand_resolution_hint: float | None = None
+    #: Robustness knob (grasp search): the object's mass (and with it its rotational inertia) times
+    #: this factor, applied to the simulation context (``station.builder.apply_context_knobs``).
+    object_mass_scale: float = 1.0
 
 
 #: UR10 home configuration (rad): the robot model's home turned by pi about the base so the
@@ -372,6 +375,8 @@ def _plant(value, where: str) -> PlantSpec:
             d["object_friction"], f"{where}.object_friction", positive=True),
         hand_resolution_hint=None if d.get("hand_resolution_hint") is None else _num(
             d["hand_resolution_hint"], f"{where}.hand_resolution_hint", positive=True),
+        object_mass_scale=_num(d.get("object_mass_scale", p.object_mass_scale), f"{where}.object_mass_scale",
+                               positive=True),
     )
 
 

@@ -35,3 +35,25 @@ def test_knobs_parse_from_yaml():
     s = scenario_from_dict("x", {"plant": {"hand_resolution_hint": 0.012, "object_friction": 0.5,
                                            "hand_effort_scale": 0.6}})
     assert (s.plant.hand_resolution_hint, s.plant.object_friction, s.plant.hand_effort_scale) == (0.012, 0.5, 0.6)
+
+
+def test_object_mass_scale_weighs_the_object_in_the_simulation_context():
+    import numpy as np
+    import pytest
+
+    from catgrasp_drake.station.builder import apply_context_knobs
+
+    base = load_scenario("drill_default")
+    heavy = base.replace(plant=dataclasses.replace(base.plant, object_mass_scale=1.3))
+    builder = DiagramBuilder()
+    h = add_station(builder, heavy)
+    diagram = builder.Build()
+    context = diagram.CreateDefaultContext()
+    plant_ctx = h.plant.GetMyContextFromRoot(context)
+    m0 = h.object_body.default_mass()
+    G0 = h.object_body.CalcSpatialInertiaInBodyFrame(plant_ctx).CopyToFullMatrix6()
+    apply_context_knobs(h, context)
+    assert h.object_body.get_mass(plant_ctx) == pytest.approx(1.3 * m0)
+    G1 = h.object_body.CalcSpatialInertiaInBodyFrame(plant_ctx).CopyToFullMatrix6()
+    np.testing.assert_allclose(G1, 1.3 * G0, rtol=1e-12, atol=1e-15)  # the same shape of inertia, 30 % more
+    assert scenario_from_dict("x", {"plant": {"object_mass_scale": 0.7}}).plant.object_mass_scale == 0.7

@@ -1,0 +1,209 @@
+"""Search a category's grasp for robustness: cross-entropy over grasp variations, scored by simulated trials.
+
+A candidate is a grasp variation (``catgrasp_drake.station.variation``: the
+hand moved and turned about the functional region, the closed posture's
+finger groups changed) of the category's hand-written grasp. Its score is
+its *robustness*: the mean over trials on the search instances, each under a
+seeded perturbation --
+
+- the object's pose off what the grasp was planned for by up to
+  ``shift_m`` (uniform in a disc, m) and ``turn_deg`` (about the vertical
+  through the object's origin), so the grasp is executed on an object that
+  is not quite where it was expected;
+- the object's friction drawn from ``friction`` (uniform);
+- its mass times a factor drawn from ``mass_scale`` (uniform),
+
+of ``functional + grasp_weight * grasped`` (1 for a functional grasp,
+``grasp_weight`` for a grasp that holds but misses the function, 0 else).
+Perturbation 0 of every instance is the nominal one. Trials are tasks of
+:func:`catgrasp_drake.runner.run_tasks`: cached (an interrupted search
+resumes), on local workers or Ray. The search runs on the committed
+instances only -- they are what may be tuned on.
+
+``apply_variation_to_spec`` turns the best variation back into a
+hand-written grasp file (position, fingers, palm, posture overrides), so the
+result is a reviewable diff of ``models/grasps/<category>_handwritten.yaml``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field, replace
+from pathlib import Path
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from catgrasp_drake.errors import InputError
+from catgrasp_drake.grasping.constraints import load_constraint
+from catgrasp_drake.grasping.search import CemParams, cem_maximize
+from catgrasp_drake.robot.models import HAND_ACTUATED_JOINTS
+from catgrasp_drake.station.variation import VARIATION_NAMES, VARIATION_SCALE, variation_dict, varied_posture
+
+TASK = "grasp_search_trial"
+
+
+@dataclass(frozen=True)
+class Robustness:
+    """How a candidate is scored (module docstring). SI units; angles in degrees."""
+
+    perturbations: int = 2  # per instance (the first is the nominal placement)
+    shift_m: float = 0.01
+    turn_deg: float = 5.0
+    friction: tuple[float, float] = (0.5, 1.0)
+    mass_scale: tuple[float, float] = (0.7, 1.3)
+    grasp_weight: float = 0.2
+    seed: int = 0
+
+    def __post_init__(self):
+        if not (isinstance(self.perturbations, int) and self.perturbations >= 1):
+            raise InputError(f"perturbations: expected a positive integer, got {self.perturbations!r}")
+        for name in ("friction", "mass_scale"):
+            lo, hi = getattr(self, name)
+            if not 0 < lo <= hi:
+                raise InputError(f"{name}: expected 0 < low <= high, got {(lo, hi)}")
+        if self.shift_m < 0 or self.turn_deg < 0 or not 0 <= self.grasp_weight <= 1:
+            raise InputError("shift_m, turn_deg >= 0 and grasp_weight in [0, 1] expected")
+
+
+def perturbation(robustness: Robustness, instance: str, k: int) -> dict:
+    """The ``k``-th perturbation of ``instance`` (k = 0: nominal): a JSON-able dict, seeded by (seed, instance, k)."""
+    if k == 0:
+        return {"dx": 0.0, "dy": 0.0, "dyaw_deg": 0.0, "friction": None, "mass_scale": 1.0}
+    import zlib
+
+    rng = np.random.default_rng([robustness.seed, zlib.crc32(instance.encode()), k, 18])
+    r = robustness.shift_m * math.sqrt(rng.uniform())
+    a = rng.uniform(0, 2 * math.pi)
+    return {"dx": round(r * math.cos(a), 6), "dy": round(r * math.sin(a), 6),
+            "dyaw_deg": round(float(rng.uniform(-robustness.turn_deg, robustness.turn_deg)), 4),
+            "friction": round(float(rng.uniform(*robustness.friction)), 4),
+            "mass_scale": round(float(rng.uniform(*robustness.mass_scale)), 4)}
+
+
+def trial_score(outcome: dict, grasp_weight: float) -> float:
+    """1 for a functional grasp, ``grasp_weight`` for a held one, 0 else."""
+    return 1.0 if outcome.get("functional") else grasp_weight if outcome.get("grasp") else 0.0
+
+
+def search_trial_task(spec: dict) -> dict:
+    """Worker task: the category's hand-written grasp with a variation, on one instance under one perturbation."""
+    from catgrasp_drake.station.handwritten import load_handwritten_motion
+    from catgrasp_drake.station.scenario import load_scenario, with_instance
+    from catgrasp_drake.station.variation import vary_motion
+    from catgrasp_drake.trial import run_grasp_trial
+
+    category, instance, p = spec["category"], spec["instance"], spec["perturbation"]
+    base = with_instance(load_scenario(f"{category}_default"), instance)
+    scenario = base.replace(plant=replace(base.plant, object_friction=p["friction"],
+                                          object_mass_scale=p["mass_scale"]))
+    motion = load_handwritten_motion(category, instance, spec.get("grasp_file"))
+    motion = vary_motion(motion, category, instance, spec["variation"])
+    # the object is off the pose the grasp was made for by E (in O): the grasp, in O, moves by E^-1
+    E = np.eye(4)
+    E[:3, :3] = Rotation.from_euler("z", p["dyaw_deg"], degrees=True).as_matrix()
+    E[:3, 3] = (p["dx"], p["dy"], 0.0)
+    motion = replace(motion, poses=np.linalg.inv(E) @ motion.poses)
+    r = run_grasp_trial(scenario, motion)
+    return {"grasp": bool(r.grasp_success), "functional": bool(r.functional_success), "reason": r.failure_reason,
+            "tilt_deg": round(float(r.object_tilt_deg), 3), "trigger_force_N": r.trigger_force_N,
+            "sim_s": round(float(r.sim_time_s), 3), "wall_s": round(float(r.wall_time_s), 3)}
+
+
+@dataclass
+class GraspSearchResult:
+    """The search's best variation and its record (every candidate, trial and score)."""
+
+    category: str
+    instances: tuple[str, ...]
+    best: dict  # variation name -> value
+    best_score: float
+    start_score: float
+    rounds: list = field(default_factory=list)  # per round: [{"variation": {...}, "score": s, "trials": [...]}]
+    trials: int = 0
+    wall_s: float = 0.0
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+def search_grasp(category: str, instances, *, cem: CemParams = CemParams(), robustness: Robustness = Robustness(),
+                 search_std=None, grasp_file: str | None = None, cache_dir: str | None = "out/grasp_search/cache",
+                 workers: int | None = None, ray: str | None = None, progress=None) -> GraspSearchResult:
+    """Cross-entropy search of ``category``'s hand-written grasp (module docstring) on ``instances``.
+
+    ``search_std``: the initial spread per variation parameter (default
+    :data:`~catgrasp_drake.station.variation.VARIATION_SCALE`; 0 freezes a
+    parameter). ``progress(round, candidates, scores)`` after each round.
+    """
+    import time
+
+    from catgrasp_drake.runner import code_fingerprint, run_tasks
+
+    instances = tuple(instances)
+    if not instances:
+        raise InputError("instances: the search needs at least one instance")
+    std = VARIATION_SCALE if search_std is None else np.asarray(search_std, float)
+    root = Path(__file__).resolve().parents[1]
+    version = code_fingerprint([root / "catgrasp_drake", root / "models"])
+    perturbations = [(i, perturbation(robustness, i, k)) for i in instances for k in range(robustness.perturbations)]
+    rounds = []
+    t0 = time.perf_counter()
+
+    def evaluate(X: np.ndarray) -> np.ndarray:
+        specs = [{"task": TASK, "category": category, "instance": i, "perturbation": p,
+                  "variation": [round(float(x), 6) for x in v], "grasp_file": grasp_file}
+                 for v in X for i, p in perturbations]
+        outcomes = run_tasks(search_trial_task, specs, cache_dir=cache_dir, code_version=version, workers=workers,
+                             ray_address=ray)
+        results = [o.result for o in outcomes]
+        n = len(perturbations)
+        scores = []
+        entries = []
+        for j, v in enumerate(X):
+            trials = results[j * n:(j + 1) * n]
+            score = float(np.mean([trial_score(t, robustness.grasp_weight) for t in trials]))
+            scores.append(score)
+            entries.append({"variation": variation_dict(v), "score": round(score, 4),
+                            "trials": [{"instance": s["instance"], "perturbation": s["perturbation"]} | t
+                                       for s, t in zip(specs[j * n:(j + 1) * n], trials)]})
+        rounds.append(entries)
+        return np.array(scores)
+
+    result = cem_maximize(evaluate, np.zeros(len(VARIATION_NAMES)), std, params=cem, on_round=progress)
+    return GraspSearchResult(category=category, instances=instances, best=variation_dict(result.best),
+                             best_score=result.best_score, start_score=float(result.scores[0][0]), rounds=rounds,
+                             trials=result.evaluations * len(perturbations), wall_s=time.perf_counter() - t0)
+
+
+def apply_variation_to_spec(spec: dict, variation: dict, category: str, postures: dict) -> dict:
+    """The hand-written grasp ``spec`` (parsed YAML) with ``variation`` written into it.
+
+    The variation turns the hand about the functional region's centre and moves it; in the spec's
+    terms (position relative to the anchor = region centre + ``anchor.point``): position' =
+    R (point + position) + d - point, fingers' = R fingers, palm' = R palm. The closed posture's
+    changed joints become ``posture_overrides.closed`` (absolute angles, rad). ``postures`` is the
+    spec's posture set (``load_hand_postures``).
+    """
+    if spec.get("anchor", {}).get("region") != load_constraint(category).region:
+        raise InputError(f"spec: the grasp must be anchored on the {load_constraint(category).region} region")
+    v = np.array([float(variation.get(n, 0.0)) for n in VARIATION_NAMES])
+    R = Rotation.from_euler("xyz", v[3:6], degrees=True).as_matrix()
+    point = np.asarray(spec["anchor"].get("point", (0.0, 0.0, 0.0)), float)
+    g = dict(spec["grasp"])
+    position = R @ (point + np.asarray(g["position"], float)) + v[:3] - point
+    g["position"] = [round(float(x), 5) for x in position]
+    g["fingers"] = [round(float(x), 5) for x in R @ np.asarray(g["fingers"], float)]
+    g["palm"] = [round(float(x), 5) for x in R @ np.asarray(g["palm"], float)]
+    out = dict(spec) | {"grasp": g}
+    closed = np.array(postures["closed"], float)
+    overrides = dict((spec.get("posture_overrides") or {}).get("closed", {}))
+    for joint, value in overrides.items():
+        closed[HAND_ACTUATED_JOINTS.index(joint)] = float(value)
+    new = varied_posture(closed, v)
+    for joint, q0, q1 in zip(HAND_ACTUATED_JOINTS, closed, new):
+        if abs(q1 - q0) > 1e-9:
+            overrides[joint] = round(float(q1), 4)
+    if overrides:
+        out["posture_overrides"] = dict(spec.get("posture_overrides") or {}) | {"closed": overrides}
+    return out

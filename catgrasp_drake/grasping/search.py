@@ -1,0 +1,118 @@
+"""Cross-entropy search for the best parameters of a noisy, expensive objective (pure numpy).
+
+Used to search grasps (``catgrasp_drake.grasp_search``): a candidate is a
+vector of grasp-variation parameters, its score the robustness measured by
+simulated trials. The objective is evaluated in batches -- one call per round
+with every candidate of the round -- so that the caller can run the trials in
+parallel (local workers or Ray).
+
+Each round draws ``population`` candidates from a diagonal Gaussian
+(clipped to ``lower``/``upper``; the round-0 population holds the mean itself
+as its first candidate, so the start is always measured), scores them,
+and refits the Gaussian to the ``elite`` best (with smoothing ``alpha`` and a
+floor ``min_std`` so the search does not collapse on a noisy score). The
+best candidate over all rounds is returned with its score, so the result is
+never worse than the start as measured. Seeded: the same inputs and ``seed``
+give the same candidates.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from catgrasp_drake.errors import InputError
+
+
+@dataclass(frozen=True)
+class CemParams:
+    """Cross-entropy method settings."""
+
+    rounds: int = 4
+    population: int = 12
+    elite: int = 3
+    alpha: float = 0.7  # weight of the elite fit in the new mean/std (1: no smoothing)
+    min_std_fraction: float = 0.1  # std floor, as a fraction of the initial std
+    seed: int = 0
+
+    def __post_init__(self):
+        for name in ("rounds", "population", "elite"):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, np.integer)) and value >= 1):
+                raise InputError(f"{name}: expected a positive integer, got {value!r}")
+        if self.elite > self.population:
+            raise InputError(f"elite: {self.elite} is more than the population {self.population}")
+        if not 0.0 < self.alpha <= 1.0:
+            raise InputError(f"alpha: expected a value in (0, 1], got {self.alpha}")
+        if not 0.0 <= self.min_std_fraction <= 1.0:
+            raise InputError(f"min_std_fraction: expected a value in [0, 1], got {self.min_std_fraction}")
+
+
+@dataclass
+class CemResult:
+    """The best candidate, its score, and every round's candidates and scores."""
+
+    best: np.ndarray
+    best_score: float
+    mean: np.ndarray  # the final sampling distribution
+    std: np.ndarray
+    candidates: list = field(default_factory=list)  # per round: (population, d)
+    scores: list = field(default_factory=list)  # per round: (population,)
+
+    @property
+    def evaluations(self) -> int:
+        return int(sum(len(s) for s in self.scores))
+
+
+def _vector(value, d: int | None, name: str) -> np.ndarray:
+    try:
+        a = np.array(value, dtype=np.float64).reshape(-1)
+    except (TypeError, ValueError):
+        raise InputError(f"{name}: expected numbers") from None
+    if d is not None and a.shape != (d,):
+        raise InputError(f"{name}: expected {d} values, got {a.size}")
+    if not np.all(np.isfinite(a)):
+        raise InputError(f"{name}: contains NaN or inf")
+    return a
+
+
+def cem_maximize(evaluate: Callable[[np.ndarray], np.ndarray], mean, std, *, lower=None, upper=None,
+                 params: CemParams = CemParams(), on_round: Callable | None = None) -> CemResult:
+    """Maximise ``evaluate`` by the cross-entropy method (module docstring).
+
+    ``evaluate(candidates (K, d)) -> scores (K,)``; ``mean``/``std`` (d,)
+    the initial Gaussian; ``lower``/``upper`` (d,) optional bounds.
+    ``on_round(round_index, candidates, scores)`` is called after every
+    round (progress, checkpoints). Returns a :class:`CemResult`.
+    """
+    mean = _vector(mean, None, "mean")
+    d = mean.size
+    std = _vector(std, d, "std")
+    if np.any(std < 0):
+        raise InputError("std: expected non-negative values")
+    lower = np.full(d, -np.inf) if lower is None else _vector(lower, d, "lower")
+    upper = np.full(d, np.inf) if upper is None else _vector(upper, d, "upper")
+    if np.any(lower > upper) or np.any(mean < lower) or np.any(mean > upper):
+        raise InputError("lower/upper: the bounds must hold the mean (lower <= mean <= upper)")
+    rng = np.random.default_rng(params.seed)
+    floor = params.min_std_fraction * std
+    result = CemResult(best=mean.copy(), best_score=-np.inf, mean=mean.copy(), std=std.copy())
+    for k in range(params.rounds):
+        X = np.clip(result.mean + result.std * rng.standard_normal((params.population, d)), lower, upper)
+        if k == 0:
+            X[0] = mean
+        scores = _vector(evaluate(X.copy()), params.population, "evaluate(...) scores")
+        result.candidates.append(X)
+        result.scores.append(scores)
+        i = int(np.argmax(scores))  # first of the ties: the start wins a tie in round 0
+        if scores[i] > result.best_score:
+            result.best, result.best_score = X[i].copy(), float(scores[i])
+        elite = X[np.argsort(-scores, kind="stable")[:params.elite]]
+        a = params.alpha
+        result.mean = a * elite.mean(axis=0) + (1 - a) * result.mean
+        result.std = np.maximum(a * elite.std(axis=0) + (1 - a) * result.std, floor)
+        if on_round is not None:
+            on_round(k, X, scores)
+    return result

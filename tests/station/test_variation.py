@@ -1,0 +1,62 @@
+"""Grasp variations: applied to a motion, written back into a grasp file, and the robustness score."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import yaml
+
+from catgrasp_drake.data.dataset import load_annotations
+from catgrasp_drake.errors import InputError
+from catgrasp_drake.grasp_search import Robustness, apply_variation_to_spec, perturbation, trial_score
+from catgrasp_drake.robot.models import HAND_ACTUATED_JOINTS, hand_joint_limits, load_hand_postures
+from catgrasp_drake.station.handwritten import GRASPS_DIR, load_handwritten_motion, motion_from_spec
+from catgrasp_drake.station.variation import VARIATION_NAMES, variation_vector, vary_motion
+
+
+@pytest.mark.parametrize("category,instance", [("drill", "drill_04"), ("mug", "mug_02"),
+                                               ("spray_bottle", "spray_bottle_07")])
+def test_a_variation_written_into_the_grasp_file_gives_the_varied_motion(category, instance):
+    v = variation_vector({"dx": 0.004, "dy": -0.007, "dz": 0.002, "roll": 3.0, "pitch": -5.0, "yaw": 7.0,
+                          "index_distal": 0.3, "middle": -0.2, "spread": 0.1, "thumb_opposition": 0.4})
+    motion = load_handwritten_motion(category, instance)
+    varied = vary_motion(motion, category, instance, v)
+    spec = yaml.safe_load((GRASPS_DIR / f"{category}_handwritten.yaml").read_text())
+    written = apply_variation_to_spec(spec, dict(zip(VARIATION_NAMES, v)), category,
+                                      load_hand_postures(spec["postures"]))
+    again = motion_from_spec(written, load_annotations(category, instance))
+    np.testing.assert_allclose(again.poses, varied.poses, atol=2e-5)  # the file rounds to 10 um
+    for name in ("open", "preshape", "closed"):
+        np.testing.assert_allclose(again.posture(name), varied.posture(name), atol=1e-4)
+    # and the variation did something: the hand moved by about |d| and the index distal flexed
+    shift = np.linalg.norm(varied.poses[1][:3, 3] - motion.poses[1][:3, 3])
+    assert 0.003 < shift < 0.05
+    i = HAND_ACTUATED_JOINTS.index("svh_index_distal")
+    lo, hi = hand_joint_limits()["svh_index_distal"]
+    assert varied.posture("closed")[i] == pytest.approx(min(hi, motion.posture("closed")[i] + 0.3))
+    np.testing.assert_array_equal(varied.posture("preshape"), motion.posture("preshape"))
+
+
+def test_the_zero_variation_is_the_grasp_itself_and_postures_stay_in_their_limits():
+    motion = load_handwritten_motion("drill", "drill_00")
+    same = vary_motion(motion, "drill", "drill_00", np.zeros(len(VARIATION_NAMES)))
+    np.testing.assert_allclose(same.poses, motion.poses, atol=1e-12)
+    big = vary_motion(motion, "drill", "drill_00", variation_vector({n: 5.0 for n in VARIATION_NAMES[6:]}))
+    limits = hand_joint_limits()
+    assert all(big.posture("closed")[k] == limits[j][1] for k, j in enumerate(HAND_ACTUATED_JOINTS))
+    with pytest.raises(InputError, match="unknown parameters"):
+        variation_vector({"twist": 1.0})
+
+
+def test_perturbations_are_seeded_within_their_ranges_and_the_first_is_nominal():
+    r = Robustness(perturbations=20, seed=3)
+    assert perturbation(r, "mug_00", 0) == {"dx": 0.0, "dy": 0.0, "dyaw_deg": 0.0, "friction": None,
+                                            "mass_scale": 1.0}
+    ps = [perturbation(r, "mug_00", k) for k in range(1, 20)]
+    assert ps == [perturbation(r, "mug_00", k) for k in range(1, 20)]
+    assert ps != [perturbation(r, "mug_01", k) for k in range(1, 20)]
+    assert all(np.hypot(p["dx"], p["dy"]) <= 0.01 and abs(p["dyaw_deg"]) <= 5 for p in ps)
+    assert all(0.5 <= p["friction"] <= 1.0 and 0.7 <= p["mass_scale"] <= 1.3 for p in ps)
+    assert trial_score({"grasp": True, "functional": True}, 0.2) == 1.0
+    assert trial_score({"grasp": True, "functional": False}, 0.2) == 0.2
+    assert trial_score({"grasp": False, "functional": False}, 0.2) == 0.0
