@@ -36,7 +36,8 @@ Yaw search: the object stands on a table (z up in the observation frame);
 (``R = R0 rotz(yaw)``), each with centroid matching (of the visible part of
 the model), runs a short fit on a subsample of O, keeps the lowest energy and
 refines it to convergence on the full cloud. Pruned early: after
-``prune_iter`` = 2 iterations only the ``yaw_keep`` = 4 lowest energies go on
+``prune_iter`` = 2 iterations only the lower half of the energies go on
+(``yaw_keep`` = "half": 4 of 8; keeping 4 of 12 lost the yaw on real drills)
 (the kept starts' results are those of the unpruned search; accuracy
 against the unpruned search: benchmarks/bench_inference.py). The search's E-step runs in float32 while the
 rounding bound allows (:data:`SEARCH_F32_TOL`); in the refine, a scheduled
@@ -380,7 +381,7 @@ def infer_latent_pose(
     scale_bounds: tuple[float, float] = (0.5, 2.0),
     search_iter: int = 12,
     search_points: int = 250,
-    yaw_keep: int | None = 4,
+    yaw_keep: int | str | None = "half",
     prune_iter: int = 2,
     recenter_visibility: bool = False,
     search_float32: bool = True,
@@ -412,7 +413,7 @@ def infer_latent_pose(
     0.5 mm of unseen-part error on the drills); ``visibility_every``: hidden
     points are recomputed every that many iterations (in the refine, not while
     no model point moved more than ``visibility_move`` m since the last time;
-    0 = always). ``yaw_keep`` (None = all) starts survive ``prune_iter``
+    0 = always). ``yaw_keep`` (None = all; "half" = half the starts, rounded up) starts survive ``prune_iter``
     iterations of the search; the rest stop there (``start_energies`` in the
     diagnostics then mixes energies after ``prune_iter`` and ``search_iter``
     iterations). ``recenter_visibility``: recompute each start's visible part
@@ -444,7 +445,11 @@ def infer_latent_pose(
     tol = non_negative(tol, "tol")
     search_iter = count(search_iter, "search_iter", 1)
     search_points = count(search_points, "search_points", 3)
-    if yaw_keep is not None:
+    if isinstance(yaw_keep, str):
+        if yaw_keep != "half":
+            raise InputError(f"yaw_keep: expected 'half', None or a count, got {yaw_keep!r}")
+        yaw_keep = max(1, -(-len(yaws) // 2))
+    elif yaw_keep is not None:
         yaw_keep = count(yaw_keep, "yaw_keep", 1, MAX_YAW_CANDIDATES)
     prune_iter = count(prune_iter, "prune_iter", 1)
     visibility_move = non_negative(visibility_move, "visibility_move")

@@ -135,7 +135,7 @@ def test_legacy_search_settings_still_find_the_yaw(space):
 
 def test_search_options_are_checked(space):
     T = space.deform(space.latent_train[0])
-    for kw in ({"yaw_keep": 0}, {"yaw_keep": 1.5}, {"prune_iter": 0}, {"visibility_move": -1.0},
+    for kw in ({"yaw_keep": 0}, {"yaw_keep": 1.5}, {"yaw_keep": "most"}, {"prune_iter": 0}, {"visibility_move": -1.0},
                {"visibility_move": float("nan")}, {"search_float32": "yes"}, {"recenter_visibility": None}):
         with pytest.raises(InputError):
             infer_latent_pose(space, T, yaw_candidates=4, **kw)
