@@ -32,7 +32,15 @@ and "x floor" = time / floor. A float32 pass is printed too.
 Peak memory: tracemalloc (numpy arrays and Python objects; a library's own C/C++
 buffers, e.g. probreg's, are not seen) of one separate, untimed run.
 
+``--committed``: instead, the real use -- CPD from each committed category's
+canonical shape (models/trained/<category>.npz) to its training instances'
+clouds (``data.dataset.instance_clouds``, the training's voxel size), with the
+shape space's beta, lambda and w, as ``build_shape_space`` calls it -- with each
+E-step; prints the largest change of the deformed points ``C + G W`` (m) against
+``e_step="exact"``.
+
 Run:  python benchmarks/bench_cpd.py --sizes 2000 4000 8000
+      python benchmarks/bench_cpd.py --committed
 """
 
 from __future__ import annotations
@@ -171,6 +179,46 @@ def methods_for(n, args):
     return rows
 
 
+def committed_models():
+    """Largest change (m) of the deformed canonical points against e_step="exact", per committed category."""
+    from catgrasp_drake.category_model import CategoryModel
+    from catgrasp_drake.data.dataset import instance_clouds
+
+    root = Path(__file__).resolve().parents[1] / "models" / "trained"
+    print("Committed shape spaces: nonrigid_cpd(canonical -> each training instance) as build_shape_space calls it "
+          "(exact kernel, max_iter 150, tol 1e-5); largest |C + G W - (C + G W_exact)| over points and instances")
+    print()
+    print("| category | M | instances | beta (m) | lambda | w | truncated (m) | fast (m) | iterations differing "
+          "(truncated / fast) | time exact / truncated / fast (s) |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for path in sorted(root.glob("*.npz")):
+        model = CategoryModel.load(path)
+        sp = model.space
+        clouds = instance_clouds(model.category, list(model.instances), model.params["cloud_voxel"])
+        c = list(model.instances).index(model.canonical_instance)
+        C = sp.canonical  # the committed source
+        G = gaussian_kernel(C, C, sp.beta)
+        worst = {"truncated": 0.0, "fast": 0.0}
+        differ = {"truncated": 0, "fast": 0}
+        spent = {e: 0.0 for e in cpd.E_STEPS}
+        for i, T in enumerate(clouds):
+            if i == c:
+                continue
+            res = {}
+            for e_step in cpd.E_STEPS:
+                t0 = time.perf_counter()
+                res[e_step] = nonrigid_cpd(C, T, beta=sp.beta, lam=sp.lam, w=sp.w, e_step=e_step)
+                spent[e_step] += time.perf_counter() - t0
+            ref = C + G @ res["exact"].W
+            for e_step in worst:
+                worst[e_step] = max(worst[e_step], float(np.abs(C + G @ res[e_step].W - ref).max()))
+                differ[e_step] += res[e_step].iterations != res["exact"].iterations
+        times = " / ".join(f"{spent[e]:.1f}" for e in cpd.E_STEPS)
+        print(f"| {model.category} | {len(C)} | {len(clouds) - 1} | {sp.beta:g} | {sp.lam:g} | {sp.w:g} "
+              f"| {worst['truncated']:.1e} | {worst['fast']:.1e} | {differ['truncated']} / {differ['fast']} "
+              f"| {times} |")
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--sizes", type=int, nargs="+", default=[2000, 4000, 8000])
@@ -181,7 +229,12 @@ def main(argv=None):
     ap.add_argument("--max-exact-kernel-size", type=int, default=2000,
                     help="catgrasp's exact kernel (O(M^3) per iteration) up to this size")
     ap.add_argument("--no-memory", action="store_true", help="skip the tracemalloc runs")
+    ap.add_argument("--committed", action="store_true",
+                    help="only the committed shape spaces' registrations: deviation of each E-step from the exact one")
     args = ap.parse_args(argv)
+    if args.committed:
+        committed_models()
+        return
     print(f"Non-rigid CPD, M = N, beta={BETA} lambda={LAM} w={W} (normalised units), {os.cpu_count()} CPUs, "
           f"{n_threads()} E-step threads, load average {os.getloadavg()[0]:.2f} at the start")
     print()

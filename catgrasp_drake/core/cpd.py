@@ -52,11 +52,13 @@ Speed-ups (all exact or with a stated, measured error):
   ``1e-9`` of its denominator is computed exactly, so each posterior column is within
   ``2e-9`` (L1) of the dense one. Dense and exact while ``sigma`` is large.
   On the committed shape spaces' registrations it moves the deformed points by
-  < 1e-12 m (benchmarks/bench_cpd.py); ``e_step="exact"`` is the dense E-step throughout.
+  < 1e-12 m (``benchmarks/bench_cpd.py --committed``); ``e_step="exact"`` is the dense
+  E-step throughout.
 * ``e_step="fast"``: the truncated E-step, and its dense blocks in float32 while the
   exponent rounding bound ``8 eps32 (max|y| + max|x|)^2 / (2 sigma2)`` is at most
-  ``3e-3`` (measured errors of the posterior sums ~1e-6 - 5e-5 relative); ~1.6x faster
-  dense iterations, results within ~1e-5 of the float64 ones (not the default).
+  ``3e-3`` (measured errors of the posterior sums ~1e-6 - 5e-5 relative); ~1.7x faster
+  dense iterations. Not the default: on the committed shape spaces' registrations it
+  moves the deformed points by up to 1.8e-5 m (the truncated E-step: < 1e-12 m).
 * ``low_rank=K``: ``G ~ Q diag(lam_K) Q^T`` from the top-``K`` eigenpairs
   (randomised subspace iteration with a fixed seed; ``G``'s row blocks kept between
   the products up to 64 MiB, recomputed above); the

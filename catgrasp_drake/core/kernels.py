@@ -113,10 +113,11 @@ class _KernelProduct:
 def low_rank_kernel(Y, beta: float, rank, *, power_iterations: int = 2, seed: int = 0, pool=None):
     """Top eigenpairs of ``G(Y, Y)``: returns ``(Q (M, K), lam (K,), kept_trace_fraction)``.
 
-    Randomised subspace iteration (Halko et al. 2011, Alg. 4.4 + 5.3) with a
-    fixed seed (deterministic). ``rank`` is an int K or ``"auto"``: the smallest
-    K whose eigenvalues hold :data:`AUTO_RANK_TRACE` of ``trace(G) = M``
-    (predicted from a 300-point subsample's spectrum, verified, doubled if short).
+    Randomised subspace iteration (Halko et al. 2011, Alg. 4.4 + 5.3; the power iterations
+    normalised by a pivoted LU, as scikit-learn's randomized_svd and fbpca do) with a fixed seed
+    (deterministic). ``rank`` is an int K or ``"auto"``: the smallest K whose eigenvalues hold
+    :data:`AUTO_RANK_TRACE` of ``trace(G) = M`` (predicted from a 300-point subsample's spectrum,
+    verified, doubled if short).
     ``pool`` (a ``concurrent.futures`` executor) computes the kernel's row blocks in threads; the
     blocks are kept between the products up to :data:`KERNEL_STORE_ELEMENTS`. Neither changes a bit
     of the result.
@@ -161,8 +162,9 @@ def _randomized_eigh(Y, beta, k, power_iterations, rng, product):
         p = min(M - k, max(10, k // 4))
         Z = product(rng.standard_normal((M, k + p)))
         for _ in range(power_iterations):
-            Z, _ = np.linalg.qr(Z)
-            Z = product(Z)
+            # between power iterations any well-conditioned basis of span(Z) will do: the pivoted LU factor
+            # (P L spans the same space; 7x cheaper than a QR here); the last one is a QR (orthonormal)
+            Z = product(scipy.linalg.lu(Z, permute_l=True, check_finite=False)[0])
         Z, _ = np.linalg.qr(Z)
         GZ = product(Z)
         Bs = Z.T @ GZ
