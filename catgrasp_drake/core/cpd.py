@@ -339,6 +339,8 @@ TRUNCATION_RTOL = 1e-9
 #: The neighbour-list E-step is used when at most this fraction of the M x N pairs is within reach
 #: (measured break-even with the dense E-step at M = N = 2000: ~1-2 %).
 SPARSE_PAIR_FRACTION = 0.01
+#: ... and at most this many pairs (~64 bytes each while they are processed: <= 128 MiB); dense above.
+MAX_SPARSE_PAIRS = 1 << 21
 #: ``e_step="fast"``: dense blocks in float32 while the exponent rounding bound ``8 eps32 B``
 #: (:func:`exponent_bound`) is at most this (relative error of a kernel value); float64 below.
 F32_EXPONENT_TOL = 3e-3
@@ -350,9 +352,10 @@ class TruncatedEStep:
 
     Per call (one EM iteration) it picks:
 
-    * neighbour lists, when at most :data:`SPARSE_PAIR_FRACTION` of the pairs lie within
-      ``r = TRUNCATION_K sigma`` (estimated from the neighbour counts of a fixed subsample of the
-      source): the pairs within ``r`` from a k-d tree pair search (scipy ``cKDTree``; the tree of X
+    * neighbour lists, when at most :data:`SPARSE_PAIR_FRACTION` of the pairs (and at most
+      :data:`MAX_SPARSE_PAIRS`) lie within ``r = TRUNCATION_K sigma`` (estimated from the
+      neighbour counts of a fixed subsample of the source; no tree while ``r`` spans both clouds'
+      bounding box): the pairs within ``r`` from a k-d tree pair search (scipy ``cKDTree``; the tree of X
       is built once), their kernel values from the exact distances; dropped pairs have kernel values
       below ``exp(-K^2/2)``, and a column whose bound ``M exp(-K^2/2) / (s_n + c)`` exceeds
       :data:`TRUNCATION_RTOL` is computed exactly (dense, float64) -- columns with no neighbour too;
@@ -365,6 +368,7 @@ class TruncatedEStep:
     def __init__(self, X: np.ndarray, w: float, *, fast: bool = False, pool=None):
         self.X, self.w, self.fast, self.pool = X, w, fast, pool
         self._tree = None
+        self._x_lo, self._x_hi = X.min(axis=0), X.max(axis=0)
         self._skip_above = math.inf  # no pair count is estimated for r above this (the fraction is surely too high)
         self.mode = None
 
@@ -377,14 +381,18 @@ class TruncatedEStep:
     def _sparse_pays(self, T: np.ndarray, r: float) -> bool:
         if r >= self._skip_above:
             return False
+        lo = np.minimum(T.min(axis=0), self._x_lo)
+        hi = np.maximum(T.max(axis=0), self._x_hi)
+        if r * r >= float(((hi - lo) ** 2).sum()):  # the ball spans both clouds' box: every pair is in reach
+            return False
         M, N = T.shape[0], self.X.shape[0]
         n = min(M, _PAIR_SAMPLE)
         sample = (np.arange(n) * (M / n)).astype(int)  # fixed, spread over the source's order
         frac = float(np.mean(self.tree.query_ball_point(T[sample], r, return_length=True))) / N
-        if frac > SPARSE_PAIR_FRACTION:
-            # the pair count of a ball shrinks at most like r^3: no new estimate until r is small enough
-            # for the fraction to have possibly reached the threshold
-            self._skip_above = r * (SPARSE_PAIR_FRACTION / frac) ** (1.0 / 3.0)
+        if frac > SPARSE_PAIR_FRACTION or frac * M * N > MAX_SPARSE_PAIRS:
+            # in a cloud of dimension <= 3 a ball's count shrinks about like r^3 at most: no new estimate until r
+            # could have brought the fraction to the threshold (a speed heuristic: the error bound never depends on it)
+            self._skip_above = r * (min(SPARSE_PAIR_FRACTION, MAX_SPARSE_PAIRS / (M * N)) / frac) ** (1.0 / 3.0)
             return False
         return True
 
