@@ -176,15 +176,27 @@ def split_objects(config: BenchmarkConfig) -> list[BenchmarkObject]:
         from catgrasp_drake.data.ycb import prepare_ycb, ycb_dir
 
         root = Path(config.data_dir) / "ycb"
+        stamp = _ycb_preparation_version()
         for category in config.categories:
             for name in YCB_BY_CATEGORY[category]:
                 directory = ycb_dir(name, root)
-                if not (directory / f"{name}.sdf").is_file():
+                marker = directory / "PREPARED_BY"
+                if not (directory / f"{name}.sdf").is_file() or not marker.is_file() \
+                        or marker.read_text().strip() != stamp:  # made by another version of the import
                     prepare_ycb(root, [name])
+                    atomic_write_text(marker, stamp + "\n")
                 out.append(BenchmarkObject("ycb", category, name, str(directory)))
     if config.instances is not None:
         out = [o for o in out if o.instance in config.instances]
     return out
+
+
+def _ycb_preparation_version() -> str:
+    """Fingerprint of the code that turns a YCB scan into an instance (a changed import re-prepares them)."""
+    from catgrasp_drake.runner import code_fingerprint
+
+    data = Path(__file__).resolve().parents[1] / "data"
+    return code_fingerprint([data / f for f in ("ycb.py", "importer.py", "meshes.py", "dataset.py")])
 
 
 # ----------------------------------------------------------------------------- placements
@@ -328,10 +340,11 @@ def trial_specs(config: BenchmarkConfig, model_paths: dict[str, str] | None = No
             path = Path((model_paths or {}).get(obj.category) or default_model_path(obj.category))
             models[obj.category] = (str(path), file_sha256(path))
         path, sha = models[obj.category]
-        # an imported object may be re-imported into the same directory: its files are part of the cache key
+        # an imported object may be re-imported into the same directory (and a YCB scan prepared again by a
+        # changed import): its files are part of the cache key
         own = ({"object_sha256": hashlib.sha256(b"".join(file_sha256(Path(obj.model_dir) / f).encode() for f in (
             f"{obj.instance}.obj", f"{obj.instance}.sdf", "annotations.json"))).hexdigest()}
-               if obj.split == "objects" else {})
+               if obj.split in ("objects", "ycb") else {})
         for view in config.views:
             for trial in range(placements):
                 for method in config.methods:

@@ -28,6 +28,10 @@ demo, the benchmark and the station use it like any instance. Steps:
    :data:`SNAP_MAX_DEG`) so the base is a real support face; then the base is
    put on z = 0 and the lateral extent centred on x = 0; y comes from the fit
    (the category model's origin).
+4b. **flat base**: the lowest :data:`BASE_FLATTEN_M` (3 mm) cut off by a
+   horizontal plane and closed flat (:func:`catgrasp_drake.data.meshes.flatten_base`),
+   everything moved down by as much (regions too): the rounded underside a
+   scan's reconstruction invents makes a tall object fall over by itself.
 5. **functional region**: the canonical instance's box, its corners and
    centre deformed by the fitted field W(x) and moved by the fit's similarity
    into the object's canonical frame, as an axis-aligned box; ``grown_by``
@@ -56,7 +60,7 @@ from catgrasp_drake.core.shape_space import ShapeSpace
 from catgrasp_drake.data.categories import DENSITY_KG_M3, FUNCTIONAL_REGION, REGION_MARGIN_M
 from catgrasp_drake.data.cloud_io import read_point_cloud
 from catgrasp_drake.data.dataset import CATEGORIES, load_annotations, write_model_files
-from catgrasp_drake.data.meshes import drop_debris, read_mesh, watertight_for_mass
+from catgrasp_drake.data.meshes import drop_debris, flatten_base, read_mesh, watertight_for_mass
 from catgrasp_drake.data.open3d_import import import_open3d
 from catgrasp_drake.data.pointclouds import full_cloud, voxel_downsample
 from catgrasp_drake.errors import InputError, ModelFileError
@@ -77,6 +81,9 @@ START_MERGE_DEG = 20.0
 MAX_STARTS = 12
 #: The fitted up direction is snapped to the nearest resting pose within this angle (deg).
 SNAP_MAX_DEG = 10.0
+#: The lowest part of an imported object cut off by a horizontal plane and closed flat (m): a scan's
+#: underside is a reconstructed dome on which a tall object rocks and falls (meshes.flatten_base).
+BASE_FLATTEN_M = 0.003
 #: Below this fit confidence the alignment is flagged for a person to check (and the CLI says so).
 LOW_CONFIDENCE = 0.6
 #: Half-extents (m) of the box put around a user's region point, per region name.
@@ -306,6 +313,36 @@ def _fit_record(r, **extra) -> dict:
             "iterations": int(r.iterations), **extra}
 
 
+def snap_rotation(R_canonical_input: np.ndarray, resting: list[np.ndarray]) -> tuple[np.ndarray, float | None]:
+    """``(R_snap, deg)``: the rotation (canonical frame) that turns the object's nearest resting pose
+    (``resting``: rotations input -> upright, :func:`resting_rotations`) exactly upright, and how far
+    it is (deg) -- the identity when none lies within :data:`SNAP_MAX_DEG` (``deg`` None: no resting
+    pose at all). Snapping makes the base a face the object really stands on."""
+    downs = [R_canonical_input @ (R.T @ np.array([0.0, 0.0, -1.0])) for R in resting]
+    if not downs:
+        return np.eye(3), None
+    d = min(downs, key=lambda v: v[2])
+    deg = math.degrees(math.acos(float(np.clip(-d[2] / np.linalg.norm(d), -1.0, 1.0))))
+    if deg > SNAP_MAX_DEG:
+        return np.eye(3), deg
+    return _rotation_taking(d / np.linalg.norm(d), np.array([0.0, 0.0, -1.0])), deg
+
+
+def level_stated_transform(X_stated: np.ndarray, mesh: trimesh.Trimesh, center_mass) -> tuple[np.ndarray, float | None,
+                                                                                          bool]:
+    """``(X, deg, snapped)``: a stated X_canonical_input levelled onto the nearest resting pose (within
+    :data:`SNAP_MAX_DEG`; a transform found by eye leaves the base a few degrees off, and the object
+    rocks onto its edge), turned about the base's lowest point, the base put back on z = 0."""
+    Rs, deg = snap_rotation(X_stated[:3, :3], resting_rotations(mesh, center_mass))
+    v = _apply(X_stated, mesh.vertices)
+    lowest = v[np.argmin(v[:, 2])]
+    X_snap = np.eye(4)
+    X_snap[:3, :3], X_snap[:3, 3] = Rs, lowest - Rs @ lowest
+    X = X_snap @ X_stated
+    X[2, 3] -= _apply(X, mesh.vertices)[:, 2].min()
+    return X, deg, bool(np.abs(Rs - np.eye(3)).max() > 0)
+
+
 def align_to_category(shape: CategoryShape, mesh: trimesh.Trimesh, center_mass, observed: np.ndarray | None = None,
                       *, yaw_candidates: int = YAW_CANDIDATES) -> Alignment:
     """The automatic alignment (module docstring, step 4) of ``mesh`` (input frame) to ``shape``'s category.
@@ -325,15 +362,9 @@ def align_to_category(shape: CategoryShape, mesh: trimesh.Trimesh, center_mass, 
     # object canonical frame = the model frame, unscaled: p_c = R^T (R_up p_in - t)
     Rc = r.R.T @ R_up
     tc = -r.R.T @ r.t
-    # snap the up direction to the nearest resting pose: the base is a face the object stands on
-    downs = np.array([Rc @ (R.T @ np.array([0.0, 0.0, -1.0])) for R in resting]) if resting else np.zeros((0, 3))
-    snap_deg, snapped = None, False
-    if len(downs):
-        j = int(np.argmin(downs[:, 2]))
-        snap_deg = math.degrees(math.acos(float(np.clip(-downs[j, 2], -1.0, 1.0))))
-        if snap_deg <= SNAP_MAX_DEG:
-            Rs = _rotation_taking(downs[j] / np.linalg.norm(downs[j]), np.array([0.0, 0.0, -1.0]))
-            Rc, tc, snapped = Rs @ Rc, Rs @ tc, True
+    Rs, snap_deg = snap_rotation(Rc, resting)
+    snapped = snap_deg is not None and snap_deg <= SNAP_MAX_DEG
+    Rc, tc = Rs @ Rc, Rs @ tc
     X = np.eye(4)
     X[:3, :3], X[:3, 3] = Rc, tc
     v = _apply(X, mesh.vertices)
@@ -448,12 +479,14 @@ def _check_inputs(category, name, mass_kg, region_point, functional):
 def import_mesh(mesh: trimesh.Trimesh, category: str, name: str, *, model: CategoryShape | None = None,
                 transform=None, mass_kg: float | None = None, region_point=None, regions: dict | None = None,
                 out=None, source: dict | None = None, observed: np.ndarray | None = None,
-                extra: dict | None = None, what: str = "mesh") -> ImportedObject:
+                extra: dict | None = None, what: str = "mesh",
+                base_flatten_m: float = BASE_FLATTEN_M) -> ImportedObject:
     """Import an in-memory mesh (input frame, metres); see :func:`import_object`.
 
     ``regions``: boxes already in the canonical frame (skips the transfer);
     ``observed``: the points to fit instead of a cloud ray-cast from the mesh;
-    ``extra``: more top-level annotation fields (e.g. the YCB table's).
+    ``extra``: more top-level annotation fields (e.g. the YCB table's);
+    ``base_flatten_m``: the base's lowest part cut off flat (module docstring, step 4b; 0: as it is).
     """
     functional = FUNCTIONAL_REGION.get(category)
     _check_inputs(category, name, mass_kg, region_point, functional)
@@ -464,8 +497,14 @@ def import_mesh(mesh: trimesh.Trimesh, category: str, name: str, *, model: Categ
     solid_in, _ = watertight_for_mass(mesh)
     # ---- alignment
     if transform is not None:
-        X = transform if isinstance(transform, np.ndarray) else parse_transform(transform)
-        alignment = Alignment(np.asarray(X, float), False)
+        X_stated = np.array(transform if isinstance(transform, np.ndarray) else parse_transform(transform), float)
+        X, snap_deg, snapped = level_stated_transform(X_stated, mesh, solid_in.center_mass)
+        if regions is not None:  # given in the stated frame: they move with the levelling
+            moved = X @ np.linalg.inv(X_stated)
+            regions = {k: dict(v) | {"center": [round(float(c), 6) for c in _apply(moved, np.asarray(
+                v["center"], float)[None])[0]]} for k, v in regions.items()}
+        alignment = Alignment(X, False, {"snap_deg": None if snap_deg is None else round(snap_deg, 3),
+                                         "snapped_to_resting_pose": snapped})
         if model is not None and regions is None and region_point is None:
             pts = full_cloud(mesh, voxel=FIT_VOXEL_M) if observed is None else observed
             fit, x, sim = fit_in_canonical_frame(model, _apply(alignment.X_canonical_input, pts))
@@ -478,6 +517,13 @@ def import_mesh(mesh: trimesh.Trimesh, category: str, name: str, *, model: Categ
     canonical = mesh.copy()
     canonical.apply_transform(X)
     solid, solid_method = watertight_for_mass(canonical)
+    # ---- a flat base (a scan's rounded underside rocks): the lowest base_flatten_m cut off flat
+    flattened, volume_m3 = False, float(solid.volume)  # the mass is the object's, before the cut
+    if solid_method != "convex_hull" and base_flatten_m > 0:
+        solid, flattened = flatten_base(solid, base_flatten_m)
+        if flattened:
+            canonical = solid
+    drop = base_flatten_m if flattened else 0.0
     # ---- regions
     if regions is not None:
         regions, region_source = {k: dict(v) for k, v in regions.items()}, "given"
@@ -490,6 +536,11 @@ def import_mesh(mesh: trimesh.Trimesh, category: str, name: str, *, model: Categ
         region_source = f"transferred from {model.canonical_instance} by the category fit"
     else:
         regions, region_source = {}, "none"
+    # everything above the cut moved down with it (the alignment X_canonical_input is kept as fitted or
+    # stated: the written mesh is X followed by the drop, as the record's base_flattened_m says)
+    if drop:
+        regions = {k: dict(v) | {"center": [float(v["center"][0]), float(v["center"][1]),
+                                            round(float(v["center"][2]) - drop, 6)]} for k, v in regions.items()}
     # ---- mass
     if mass_kg is not None:
         mass, mass_source = float(mass_kg), "given"
@@ -497,7 +548,7 @@ def import_mesh(mesh: trimesh.Trimesh, category: str, name: str, *, model: Categ
         raise InputError(f"{what}: not watertight and hole filling cannot close it, so its volume (and mass) "
                          "is unknown: close it (e.g. Poisson in MeshLab) or give the mass (--mass KG)")
     else:
-        mass, mass_source = DENSITY_KG_M3[category] * float(solid.volume), "category density x volume"
+        mass, mass_source = DENSITY_KG_M3[category] * volume_m3, "category density x volume"
     density = mass / float(solid.volume)
     solid.density = density
     written_mesh = solid if solid_method == "repaired" else canonical
@@ -509,6 +560,7 @@ def import_mesh(mesh: trimesh.Trimesh, category: str, name: str, *, model: Categ
                            "convex_hull": "the input mesh (open; inertia from its convex hull)"}[solid_method],
         "mass_source": mass_source,
         "region_source": region_source,
+        "base_flattened_m": drop,
     }
     directory = Path(out) if out is not None else default_out_dir(category, name)
     fields = {"inertia_from": solid_method, "density_kg_m3": round(density, 3), "functional": bool(regions),

@@ -110,3 +110,33 @@ def watertight_for_mass(mesh: trimesh.Trimesh) -> tuple[trimesh.Trimesh, str]:
             and f.volume <= 1.001 * m.convex_hull.volume:
         return f, "repaired"
     return m.convex_hull, "convex_hull"
+
+
+def flatten_base(mesh: trimesh.Trimesh, depth_m: float) -> tuple[trimesh.Trimesh, bool]:
+    """``mesh`` (upright: z up, base at its lowest point) with its lowest ``depth_m`` cut off by a
+    horizontal plane and the cut closed flat (manifold3d's ``trim_by_plane``), then moved down by
+    ``depth_m`` so the new flat base is at the old lowest height. Returns ``(mesh, flattened)``.
+
+    Why: a scan's underside is rarely measured -- the surface reconstruction closes it with a rounded
+    dome, on which a tall object rocks and falls over by itself (the YCB Windex bottle: a base
+    curvature radius of about 2 cm under a centre of mass 10 cm high). A real bottle stands on a flat
+    base. A mesh manifold3d cannot take (not closed) is returned as it is, with ``False``.
+    """
+    import manifold3d
+
+    if depth_m <= 0:
+        return mesh, False
+    lo = float(mesh.bounds[0][2])
+    try:
+        solid = manifold3d.Manifold(manifold3d.Mesh(vert_properties=np.asarray(mesh.vertices, np.float32),
+                                                    tri_verts=np.asarray(mesh.faces, np.uint32)))
+    except Exception:  # noqa: BLE001 -- manifold3d raises its own types for non-manifold input
+        return mesh, False
+    if solid.is_empty() or solid.status() != manifold3d.Error.NoError:
+        return mesh, False
+    out = solid.trim_by_plane([0.0, 0.0, 1.0], lo + float(depth_m)).to_mesh()
+    flat = trimesh.Trimesh(np.asarray(out.vert_properties[:, :3], float), np.asarray(out.tri_verts), process=True)
+    if len(flat.faces) == 0 or not flat.is_watertight:
+        return mesh, False
+    flat.apply_translation([0.0, 0.0, -float(depth_m)])
+    return flat, True

@@ -298,9 +298,10 @@ def _ycb_disagreement(name, models, flip_ok):
 
 @pytest.mark.parametrize("name, flip_ok", [
     ("ycb_035", False), ("ycb_022", False), ("ycb_025", False), ("ycb_006", True),
-    pytest.param("ycb_021", True, marks=pytest.mark.xfail(strict=True, reason=(
-        "bleach cleanser, outside the spray-bottle shape space: the fit turns it 90.9 deg about z from the "
-        "stated 'wide side along x', putting its leaning spout toward +y like a nozzle (docs/import.md)"))),
+    # the bleach cleanser (no trigger head, outside the spray-bottle shape space) was 90.9 deg off before the
+    # session-6 changes to the latent fit's yaw search; 0.2 deg, 2.1 mm since. Not by design: for a shape
+    # outside the category, the yaw the fit settles on is luck either way.
+    ("ycb_021", True),
 ])
 def test_the_automatic_alignment_agrees_with_the_stated_ycb_transforms(tmp_path, monkeypatch, models, name,
                                                                        flip_ok):

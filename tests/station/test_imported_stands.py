@@ -1,0 +1,65 @@
+"""An imported scan with a rounded underside stands on the table once its base is flattened (and falls without)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import trimesh
+
+from catgrasp_drake.data.importer import import_mesh
+from catgrasp_drake.data.meshes import flatten_base
+
+
+def _domed_bottle() -> trimesh.Trimesh:
+    """A 26 cm bottle, 8 cm wide, whose underside is a dome like a scan's reconstructed bottom (15 mm sag:
+    a radius of curvature of about 5 cm under a centre of mass 14 cm high)."""
+    body = trimesh.creation.cylinder(radius=0.04, height=0.26, sections=64)
+    body.apply_translation([0.0, 0.0, 0.13 + 0.015])
+    dome = trimesh.creation.icosphere(subdivisions=5, radius=1.0)
+    dome.apply_scale([0.0399, 0.0399, 0.015])
+    dome.apply_translation([0.0, 0.0, 0.015])
+    return trimesh.boolean.union([body, dome], engine="manifold")
+
+
+def test_flatten_base_cuts_a_flat_face_at_the_old_lowest_height():
+    m = _domed_bottle()
+    flat, done = flatten_base(m, 0.003)
+    assert done and flat.is_watertight
+    assert flat.bounds[0][2] == pytest.approx(m.bounds[0][2], abs=1e-6)
+    assert flat.bounds[1][2] == pytest.approx(m.bounds[1][2] - 0.003, abs=1e-6)
+    base = flat.vertices[np.abs(flat.vertices[:, 2] - flat.bounds[0][2]) < 1e-6]
+    radius = np.hypot(base[:, 0], base[:, 1]).max()
+    assert 0.015 < radius < 0.03  # a flat disc where the dome was cut (r = 4 cm * sqrt(1 - (1 - 0.2)^2))
+    same, done = flatten_base(m, 0.0)
+    assert same is m and not done
+
+
+def _tilt_after(directory, name, seconds=2.5) -> float:
+    from pydrake.systems.analysis import Simulator
+
+    from catgrasp_drake.station.scenario import load_scenario, with_instance
+    from catgrasp_drake.trial import trial_diagram
+
+    scenario = with_instance(load_scenario("spray_bottle_default"), name, category="spray_bottle",
+                             model_dir=str(directory))
+    td = trial_diagram(scenario)
+    context = td.diagram.CreateDefaultContext()
+    simulator = Simulator(td.diagram, context)
+    simulator.AdvanceTo(seconds)
+    h = td.station
+    X = h.plant.EvalBodyPoseInWorld(h.plant.GetMyContextFromRoot(context), h.object_body).GetAsMatrix4()
+    return float(np.degrees(np.arccos(np.clip(X[2, 2], -1.0, 1.0))))
+
+
+def test_a_domed_scan_falls_over_by_itself_and_stands_once_imported_with_a_flat_base(tmp_path):
+    m = _domed_bottle()
+    m.apply_translation([0.0, 0.0, -m.bounds[0][2]])
+    m.apply_transform(trimesh.transformations.rotation_matrix(np.radians(1.0), [1, 0, 0]))  # leaning by 1 deg
+    regions = {"trigger": {"center": [0.0, 0.04, 0.23], "half_extents": [0.01, 0.01, 0.01], "grown_by": 0.003}}
+    kw = dict(transform="0 0 0 0 0 0", regions=regions, mass_kg=1.0)
+    domed = import_mesh(m, "spray_bottle", "domed", out=tmp_path / "domed", base_flatten_m=0.0, **kw)
+    flat = import_mesh(m, "spray_bottle", "flat", out=tmp_path / "flat", **kw)
+    assert domed.record["base_flattened_m"] == 0.0 and flat.record["base_flattened_m"] == 0.003
+    assert flat.regions["trigger"]["center"][2] == pytest.approx(0.23 - 0.003, abs=5e-4)  # moved down with the cut
+    assert _tilt_after(tmp_path / "domed", "domed") > 30.0  # rocks on its dome and falls
+    assert _tilt_after(tmp_path / "flat", "flat") < 2.0
