@@ -429,7 +429,8 @@ def _cmd_search_grasp(args) -> int:
     total = args.rounds
     result = search_grasp(args.category, chosen, cem=CemParams(rounds=args.rounds, population=args.population,
                                                                  elite=args.elite, seed=args.seed),
-                          robustness=Robustness(perturbations=args.perturbations, seed=args.seed), search_std=std,
+                          robustness=Robustness(perturbations=args.perturbations, seed=args.seed,
+                                                mass_scale=tuple(args.mass_scale)), search_std=std,
                           grasp_file=str(grasp_file), cache_dir=args.cache, workers=args.workers, ray=args.ray,
                           progress=lambda k, X, s: bar(f"rounds (best so far {max(s):.2f})", k + 1, total))
     out = Path(args.out or f"out/grasp_search/{args.category}")
@@ -437,9 +438,10 @@ def _cmd_search_grasp(args) -> int:
     new = apply_variation_to_spec(spec, result.best, args.category, load_hand_postures(spec.get("postures",
                                                                                                 args.category)))
     atomic_write_text(out / "search.json", json.dumps(result.to_dict(), indent=1) + "\n")
-    header = (f"# Searched by `catgrasp search-grasp --category {args.category}` from {grasp_file.name}: "
-              f"robustness {result.start_score:.2f} -> {result.best_score:.2f} on {len(chosen)} instances x "
-              f"{args.perturbations} perturbations ({result.trials} trials).\n")
+    header = (f"# Searched by `catgrasp search-grasp --category {args.category} --perturbations {args.perturbations} "
+              f"--mass-scale {args.mass_scale[0]:g} {args.mass_scale[1]:g}` from {grasp_file.name}: robustness "
+              f"{result.start_score:.2f} -> {result.best_score:.2f} on {len(chosen)} instances ({', '.join(chosen)}), "
+              f"{result.trials} trials.\n")
     atomic_write_text(out / grasp_file.name, header + yaml.safe_dump(new, sort_keys=False, default_flow_style=None))
     print(f"robustness {result.start_score:.2f} (as written) -> {result.best_score:.2f}; best variation "
           f"{ {k: v for k, v in result.best.items() if v} }; {result.trials} trials in {result.wall_s:.0f} s")
@@ -636,6 +638,9 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--elite", type=_int_at_least(1, 200), default=3)
     g.add_argument("--perturbations", type=_int_at_least(1, 50), default=1,
                    help="trials per instance and candidate (the first at the nominal placement)")
+    g.add_argument("--mass-scale", type=float, nargs=2, metavar=("LOW", "HIGH"), default=(0.7, 1.3),
+                   help="the perturbed trials' object mass, times the instance's (uniform; e.g. 1 3 for bottles "
+                        "that may be full)")
     g.add_argument("--freeze", nargs="+", default=None, help="variation parameters kept at 0 (e.g. dx dy dz)")
     g.add_argument("--seed", type=_int_at_least(0, MAX_SEED), default=0)
     g.add_argument("--cache", default="out/grasp_search/cache", help="trial cache (resumes an interrupted search)")

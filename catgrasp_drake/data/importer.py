@@ -28,6 +28,9 @@ demo, the benchmark and the station use it like any instance. Steps:
    :data:`SNAP_MAX_DEG`) so the base is a real support face; then the base is
    put on z = 0 and the lateral extent centred on x = 0; y comes from the fit
    (the category model's origin).
+4a. **one piece**: pieces of the mesh stacked with a vertical gap of at most
+   2 cm are joined by the convex hull of their surfaces next to the gap
+   (:func:`catgrasp_drake.data.meshes.bridge_gaps`: the Windex scan misses its neck).
 4b. **flat base**: the lowest :data:`BASE_FLATTEN_M` (3 mm) cut off by a
    horizontal plane and closed flat (:func:`catgrasp_drake.data.meshes.flatten_base`),
    everything moved down by as much (regions too): the rounded underside a
@@ -60,7 +63,7 @@ from catgrasp_drake.core.shape_space import ShapeSpace
 from catgrasp_drake.data.categories import DENSITY_KG_M3, FUNCTIONAL_REGION, REGION_MARGIN_M
 from catgrasp_drake.data.cloud_io import read_point_cloud
 from catgrasp_drake.data.dataset import CATEGORIES, load_annotations, write_model_files
-from catgrasp_drake.data.meshes import drop_debris, flatten_base, read_mesh, watertight_for_mass
+from catgrasp_drake.data.meshes import bridge_gaps, drop_debris, flatten_base, read_mesh, watertight_for_mass
 from catgrasp_drake.data.open3d_import import import_open3d
 from catgrasp_drake.data.pointclouds import full_cloud, voxel_downsample
 from catgrasp_drake.errors import InputError, ModelFileError
@@ -516,6 +519,7 @@ def import_mesh(mesh: trimesh.Trimesh, category: str, name: str, *, model: Categ
     X = alignment.X_canonical_input
     canonical = mesh.copy()
     canonical.apply_transform(X)
+    canonical, bridges = bridge_gaps(canonical)  # a scan in stacked pieces (a neck it missed) made one
     solid, solid_method = watertight_for_mass(canonical)
     # ---- a flat base (a scan's rounded underside rocks): the lowest base_flatten_m cut off flat
     flattened, volume_m3 = False, float(solid.volume)  # the mass is the object's, before the cut
@@ -561,6 +565,7 @@ def import_mesh(mesh: trimesh.Trimesh, category: str, name: str, *, model: Categ
         "mass_source": mass_source,
         "region_source": region_source,
         "base_flattened_m": drop,
+        "bridged_gaps": bridges,
     }
     directory = Path(out) if out is not None else default_out_dir(category, name)
     fields = {"inertia_from": solid_method, "density_kg_m3": round(density, 3), "functional": bool(regions),

@@ -63,3 +63,22 @@ def test_a_domed_scan_falls_over_by_itself_and_stands_once_imported_with_a_flat_
     assert flat.regions["trigger"]["center"][2] == pytest.approx(0.23 - 0.003, abs=5e-4)  # moved down with the cut
     assert _tilt_after(tmp_path / "domed", "domed") > 30.0  # rocks on its dome and falls
     assert _tilt_after(tmp_path / "flat", "flat") < 2.0
+
+
+def test_a_scan_in_two_stacked_pieces_is_bridged_into_one_solid():
+    from catgrasp_drake.data.meshes import bridge_gaps
+
+    body = trimesh.creation.cylinder(radius=0.04, height=0.18, sections=48)
+    body.apply_translation([0.0, 0.0, 0.09])
+    head = trimesh.creation.box([0.03, 0.08, 0.04])
+    head.apply_translation([0.0, 0.01, 0.18 + 0.015 + 0.02])  # 15 mm above the body: the missing neck
+    joined, bridges = bridge_gaps(trimesh.util.concatenate([body, head]))
+    assert bridges == 1 and joined.is_watertight and len(joined.split(only_watertight=False)) == 1
+    assert joined.volume > body.volume + head.volume  # the bridge adds the neck
+    # at mid-gap there is solid now, no wider than the pieces next to it
+    section = joined.section(plane_origin=[0.0, 0.0, 0.1875], plane_normal=[0.0, 0.0, 1.0])
+    assert section is not None
+    lo, hi = section.bounds
+    assert np.all(lo[:2] >= [-0.04 - 1e-6, -0.04 - 1e-6]) and np.all(hi[:2] <= [0.04 + 1e-6, 0.05 + 1e-6])
+    side_by_side = trimesh.util.concatenate([body, body.copy().apply_translation([0.2, 0.0, 0.0])])
+    assert bridge_gaps(side_by_side)[1] == 0
