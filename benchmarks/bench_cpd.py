@@ -12,7 +12,7 @@ work; pycpd also stops when sigma2 stops changing exactly, hence the
 per-iteration column) with the same kernel width beta (probreg's ``beta`` is the
 squared width: it gets beta^2), lambda (pycpd's alpha, probreg's lmd), w and
 initial sigma2 rule; rows marked "own stop" use catgrasp's stopping rule
-(objective change per point < 1e-5). Error = RMS distance between the
+(nonrigid_cpd's defaults: objective change per point < 1e-5, at most 150 iterations). Error = RMS distance between the
 registered source points and their known ground-truth positions, relative to
 the RMS displacement.
 
@@ -23,6 +23,9 @@ blocks under a stated rounding bound); all with the low-rank kernel
 (``low_rank="auto"``), plus the exact kernel (old settings) up to
 ``--max-exact-kernel-size``.
 
+"CPU (s)": the process's CPU time in that run (all threads; on a loaded machine
+the wall time can exceed it, on a quiet one the threads bring the wall time below it).
+
 E-step floor: one fused exp-and-sum pass over the M x N exponents (numpy ``exp``
 then the column sums of each cache-resident column block, the block layout and
 threads of catgrasp's E-step, exponents precomputed: no GEMM, no products),
@@ -30,7 +33,8 @@ float64, best of 5; "floor" = that per-iteration time x the row's iterations,
 and "x floor" = time / floor. A float32 pass is printed too.
 
 Peak memory: tracemalloc (numpy arrays and Python objects; a library's own C/C++
-buffers, e.g. probreg's, are not seen) of one separate, untimed run.
+buffers, e.g. probreg's, are not seen) of one separate, untimed run, for the
+"own stop" rows (the "100 it" rows allocate the same), the exact kernel and pycpd (5 iterations).
 
 ``--committed``: instead, the real use -- CPD from each committed category's
 canonical shape (models/trained/<category>.npz) to its training instances'
@@ -66,6 +70,7 @@ from catgrasp_drake.core.threads import n_threads, single_threaded_blas  # noqa:
 
 BETA, LAM, W = 0.7, 5.0, 0.01  # normalised units (data RMS radius 1; 0.7 ~ the true field's 0.05 m)
 OWN_TOL = 1e-5  # nonrigid_cpd's default stopping rule
+OWN_MAX_ITER = 150  # "own stop" rows: nonrigid_cpd's default cap
 GOAL_N, GOAL_S = 2000, 0.3  # issue 17: M = N = 2000 in <= 0.3 s at pycpd's accuracy or better
 
 
@@ -113,14 +118,15 @@ def version(dist):
         return None
 
 
-def timed(fn, repeat=1):
+def timed(fn, repeat=1, cpu=False):
+    """Result of ``fn()`` and its best wall time of ``repeat`` runs (and that run's CPU time of the process)."""
     best, out = None, None
     for _ in range(repeat):
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         out = fn()
-        dt = time.perf_counter() - t0
-        best = dt if best is None or dt < best else best
-    return out, best
+        dt, dc = time.perf_counter() - t0, time.process_time() - c0
+        best = (dt, dc) if best is None or dt < best[0] else best
+    return (out, best[0], best[1]) if cpu else (out, best[0])
 
 
 def peak_mib(fn):
@@ -168,8 +174,8 @@ def methods_for(n, args):
                                                                        "truncated"),
                           ("fast: low-rank, e_step='fast'", "fast")):
         rows.append((f"catgrasp {label}, 100 it", lambda Y, X, e=e_step: run_ours(Y, X, it, "auto", e),
-                     args.repeat, True))
-        rows.append((f"catgrasp {label}, own stop", lambda Y, X, e=e_step: run_ours(Y, X, it, "auto", e, own),
+                     args.repeat, False))
+        rows.append((f"catgrasp {label}, own stop", lambda Y, X, e=e_step: run_ours(Y, X, OWN_MAX_ITER, "auto", e, own),
                      args.repeat, True))
     if n <= args.max_reference_size:
         rows.append((f"pycpd {version('pycpd') or '(not installed)'}, 100 it", lambda Y, X: run_pycpd(Y, X, it), 1,
@@ -238,9 +244,10 @@ def main(argv=None):
     print(f"Non-rigid CPD, M = N, beta={BETA} lambda={LAM} w={W} (normalised units), {os.cpu_count()} CPUs, "
           f"{n_threads()} E-step threads, load average {os.getloadavg()[0]:.2f} at the start")
     print()
-    print("| M = N | method | time (s) | iterations | ms / iteration | kernel rank | RMS error / RMS displacement "
-          "| RMS / pycpd's RMS | speed-up vs pycpd | E-step floor (s) | x floor | peak memory (MiB) |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+    print("| M = N | method | time (s) | CPU (s) | iterations | ms / iteration | kernel rank "
+          "| RMS error / RMS displacement | RMS / pycpd's RMS | speed-up vs pycpd | E-step floor (s) | x floor "
+          "| peak memory (MiB) |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     notes, goal = [], None
     floors = {}
     for n in args.sizes:
@@ -249,31 +256,31 @@ def main(argv=None):
         floor64 = estep_floor(n, n, np.float64)
         floors[n] = (floor64, estep_floor(n, n, np.float32))
         rows = []
-        for name, fn, repeat, ours in methods_for(n, args):
+        for name, fn, repeat, memory in methods_for(n, args):
             try:
-                (T, it, rank), dt = timed(lambda fn=fn: fn(Y, X), repeat if n <= 2000 else 1)
+                (T, it, rank), dt, dc = timed(lambda fn=fn: fn(Y, X), repeat if n <= 2000 else 1, cpu=True)
             except ImportError as e:
-                rows.append((name, None, str(e), None, None, None))
+                rows.append((name, None, str(e), None, None, None, None))
                 continue
             rms = np.sqrt(((T - gt) ** 2).sum(1).mean()) / disp
             mem = None
-            if ours and not args.no_memory:
+            if memory and not args.no_memory:
                 mem = peak_mib(lambda fn=fn: fn(Y, X))
             elif name.startswith("pycpd") and not args.no_memory and n <= 4000:
                 mem = peak_mib(lambda: run_pycpd(Y, X, 5))
                 name += " (memory: 5 it)"
-            rows.append((name, dt, it, rank, rms, mem))
+            rows.append((name, dt, it, rank, rms, mem, dc))
         ref = next((r for r in rows if r[0].startswith("pycpd") and r[1] is not None), None)
-        for name, dt, it, rank, rms, mem in rows:
+        for name, dt, it, rank, rms, mem, dc in rows:
             if dt is None:
-                print(f"| {n} | {name} | skipped ({it}) | | | | | | | | | |")
+                print(f"| {n} | {name} | skipped ({it}) | | | | | | | | | | |")
                 continue
             rr = f"{rms / ref[4]:.3f}" if ref else "-"
             sp = f"{ref[1] / dt:.1f}x" if ref else "-"
             fl = floor64 * it
             ms = f"{mem:.0f}" if mem is not None else "-"
-            print(f"| {n} | {name} | {dt:.3f} | {it} | {1e3 * dt / it:.1f} | {rank} | {rms:.4f} | {rr} | {sp} "
-                  f"| {fl:.3f} | {dt / fl:.1f} | {ms} |")
+            print(f"| {n} | {name} | {dt:.3f} | {dc:.3f} | {it} | {1e3 * dt / it:.1f} | {rank} | {rms:.4f} | {rr} "
+                  f"| {sp} | {fl:.3f} | {dt / fl:.1f} | {ms} |")
             if n == GOAL_N and ref and name.startswith("catgrasp") and "own stop" in name:
                 if goal is None or dt < goal[1]:
                     goal = (name, dt, rms / ref[4])

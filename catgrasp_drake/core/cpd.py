@@ -355,10 +355,11 @@ class TruncatedEStep:
     * neighbour lists, when at most :data:`SPARSE_PAIR_FRACTION` of the pairs (and at most
       :data:`MAX_SPARSE_PAIRS`) lie within ``r = TRUNCATION_K sigma`` (estimated from the
       neighbour counts of a fixed subsample of the source; no tree while ``r`` spans both clouds'
-      bounding box): the pairs within ``r`` from a k-d tree pair search (scipy ``cKDTree``; the tree of X
-      is built once), their kernel values from the exact distances; dropped pairs have kernel values
-      below ``exp(-K^2/2)``, and a column whose bound ``M exp(-K^2/2) / (s_n + c)`` exceeds
-      :data:`TRUNCATION_RTOL` is computed exactly (dense, float64) -- columns with no neighbour too;
+      bounding box): the pairs within ``r`` from a k-d tree pair search (scipy ``cKDTree``; the trees
+      of X's two fixed halves are built once and searched in two threads), their kernel values
+      from the exact distances; dropped pairs have kernel values below ``exp(-K^2/2)``, and a
+      column whose bound ``M exp(-K^2/2) / (s_n + c)`` exceeds :data:`TRUNCATION_RTOL` is computed
+      exactly (dense, float64) -- columns with no neighbour too;
     * else the dense float64 E-step (:func:`estep`, exact), or with ``fast=True`` its float32 blocks
       while ``8 eps32`` :func:`exponent_bound` ``<=`` :data:`F32_EXPONENT_TOL`.
 
@@ -367,16 +368,22 @@ class TruncatedEStep:
 
     def __init__(self, X: np.ndarray, w: float, *, fast: bool = False, pool=None):
         self.X, self.w, self.fast, self.pool = X, w, fast, pool
-        self._tree = None
+        N = X.shape[0]
+        step = -(-N // THREADED_BLOCKS)
+        self.bounds = [(lo, min(N, lo + step)) for lo in range(0, N, step)]
+        self._trees = None
+        self.ctr = X.mean(axis=0)
+        self.Xc = X - self.ctr
         self._x_lo, self._x_hi = X.min(axis=0), X.max(axis=0)
         self._skip_above = math.inf  # no pair count is estimated for r above this (the fraction is surely too high)
         self.mode = None
 
     @property
-    def tree(self):
-        if self._tree is None:
-            self._tree = cKDTree(self.X)
-        return self._tree
+    def trees(self):
+        """k-d trees of the targets in :data:`THREADED_BLOCKS` fixed column ranges (built once)."""
+        if self._trees is None:
+            self._trees = [cKDTree(self.X[lo:hi]) for lo, hi in self.bounds]
+        return self._trees
 
     def _sparse_pays(self, T: np.ndarray, r: float) -> bool:
         if r >= self._skip_above:
@@ -388,7 +395,7 @@ class TruncatedEStep:
         M, N = T.shape[0], self.X.shape[0]
         n = min(M, _PAIR_SAMPLE)
         sample = (np.arange(n) * (M / n)).astype(int)  # fixed, spread over the source's order
-        frac = float(np.mean(self.tree.query_ball_point(T[sample], r, return_length=True))) / N
+        frac = sum(float(np.sum(t.query_ball_point(T[sample], r, return_length=True))) for t in self.trees) / (n * N)
         if frac > SPARSE_PAIR_FRACTION or frac * M * N > MAX_SPARSE_PAIRS:
             # in a cloud of dimension <= 3 a ball's count shrinks about like r^3 at most: no new estimate until r
             # could have brought the fraction to the threshold (a speed heuristic: the error bound never depends on it)
@@ -404,8 +411,7 @@ class TruncatedEStep:
             self.mode = "sparse"
             return self._sparse(T, sigma2, r)
         if self.fast:
-            ctr = X.mean(axis=0)
-            if 8.0 * _EPS32 * exponent_bound(T - ctr, X - ctr, sigma2) <= F32_EXPONENT_TOL:
+            if 8.0 * _EPS32 * exponent_bound(T - self.ctr, self.Xc, sigma2) <= F32_EXPONENT_TOL:
                 self.mode = "dense32"
                 return estep(T, X, sigma2, w, pool=self.pool, dtype=np.float32)
         self.mode = "dense"
@@ -417,26 +423,39 @@ class TruncatedEStep:
         N = X.shape[0]
         log_c = _log_uniform(w, sigma2, D, M, N)
         c = math.exp(min(log_c, 700.0)) if log_c > -700.0 else 0.0
-        pairs = cKDTree(T).sparse_distance_matrix(self.tree, r, output_type="ndarray")
-        i, j, d = pairs["i"], pairs["j"], pairs["v"]
-        k = np.exp(d * d * (-0.5 / sigma2))
-        s = np.bincount(j, k, minlength=N)
-        den = s + c
-        exact = den * TRUNCATION_RTOL < M * math.exp(-0.5 * TRUNCATION_K**2)
-        if np.any(exact):
-            keep = ~exact[j]
-            i, j, k = i[keep], j[keep], k[keep]
-        ctr = X.mean(axis=0)
-        Xc = X - ctr
-        p = k / den[j]
-        acc = np.empty((M, D + 1))
-        for dim in range(D):
-            acc[:, dim] = np.bincount(i, p * Xc[j, dim], minlength=M)
-        acc[:, D] = np.bincount(i, p, minlength=M)
-        Pt1 = s / np.where(exact, 1.0, den)  # (exact columns: overwritten below)
-        with np.errstate(divide="ignore"):
-            sum_logden = float(np.log(den[~exact]).sum())
-        cols = np.flatnonzero(exact)
+        tree_T = cKDTree(T)
+        bound = M * math.exp(-0.5 * TRUNCATION_K**2)
+        Xc = self.Xc
+
+        def part(h):  # the targets of one fixed column range (pair search without the GIL)
+            lo, hi = self.bounds[h]
+            pairs = tree_T.sparse_distance_matrix(self.trees[h], r, output_type="ndarray")
+            i, j, d = pairs["i"], pairs["j"], pairs["v"]
+            k = np.exp(d * d * (-0.5 / sigma2))
+            s = np.bincount(j, k, minlength=hi - lo)
+            den = s + c
+            exact = den * TRUNCATION_RTOL < bound
+            if np.any(exact):
+                keep = ~exact[j]
+                i, j, k = i[keep], j[keep], k[keep]
+            p = k / den[j]
+            acc = np.empty((M, D + 1))
+            xs = Xc[lo:hi]
+            for dim in range(D):
+                acc[:, dim] = np.bincount(i, p * xs[j, dim], minlength=M)
+            acc[:, D] = np.bincount(i, p, minlength=M)
+            with np.errstate(divide="ignore"):
+                logden = float(np.log(den[~exact]).sum())
+            return acc, s / np.where(exact, 1.0, den), logden, exact  # (exact columns: redone below)
+
+        hs = range(len(self.bounds))
+        parts = list(self.pool.map(part, hs)) if self.pool is not None else [part(h) for h in hs]
+        acc = parts[0][0]
+        for q in parts[1:]:
+            acc = acc + q[0]
+        Pt1 = np.concatenate([q[1] for q in parts])
+        sum_logden = sum(q[2] for q in parts)
+        cols = np.flatnonzero(np.concatenate([q[3] for q in parts]))
         if len(cols):
             _, Ysc, _, Ya, _ = _augmented(T, X, sigma2)
             Xs = Xc[cols]
@@ -444,11 +463,11 @@ class TruncatedEStep:
             Xa[:, :D] = Xs
             Xa[:, D] = 1.0
             Xa[:, D + 1] = (-0.5 / sigma2) * (Xs * Xs).sum(1)
-            part, pt1, part_logden = _estep_block(Ya, Ysc, Xs, Xa, sigma2, log_c, 0, len(cols))
-            acc += part
+            extra, pt1, extra_logden = _estep_block(Ya, Ysc, Xs, Xa, sigma2, log_c, 0, len(cols))
+            acc += extra
             Pt1[cols] = pt1
-            sum_logden += part_logden
-        return _statistics(acc, Pt1, sum_logden, ctr, w, sigma2, M, N, D)
+            sum_logden += extra_logden
+        return _statistics(acc, Pt1, sum_logden, self.ctr, w, sigma2, M, N, D)
 
 
 def sigma2_update(X, T, e: EStep) -> float:

@@ -200,7 +200,7 @@ def test_truncated_estep_is_the_dense_one_while_sigma_is_large():
     assert np.array_equal(got.PX, ref.PX) and np.array_equal(got.P1, ref.P1) and got.nll == ref.nll
     wide = cpd.TruncatedEStep(X, 0.05)
     wide(Y, 1.0)  # 9 sigma spans both clouds' bounding box: dense, and no k-d tree is built
-    assert wide.mode == "dense" and wide._tree is None
+    assert wide.mode == "dense" and wide._trees is None
 
 
 def test_float32_estep_within_its_stated_bound():
