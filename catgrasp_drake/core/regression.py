@@ -87,3 +87,136 @@ def fit_ridge(X, Y, *, alpha: float = 1e-2, groups=None) -> LinearRegressor:
         coef = np.zeros((Y.shape[1], 0))
     intercept = y_mean - coef @ x_mean
     return LinearRegressor(coef=coef, intercept=intercept, alpha=float(alpha))
+
+
+# ----------------------------------------------------------------------------- shape-dependent regressors
+def instance_means(X, Y, groups) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(labels, x (m, q), y (m, D))``: one row per instance, its latent vector and mean descriptor.
+
+    With every instance weighted equally (module docstring), fitting the rows is fitting these means.
+    Rows of one instance must share their latent vector."""
+    X = real_array(X, "regression: X", "(n, q) array")
+    Y = real_array(Y, "regression: Y", "(n, D) array")
+    g = np.asarray(groups)
+    if X.ndim != 2 or Y.ndim != 2 or X.shape[0] != Y.shape[0] or g.shape != (X.shape[0],) or not len(g):
+        raise InputError(f"regression: X {X.shape}, Y {Y.shape} and groups {g.shape} must label the same n >= 1 rows")
+    labels, inverse = np.unique(g, return_inverse=True)
+    inverse = inverse.reshape(-1)
+    x = np.stack([X[inverse == k][0] for k in range(len(labels))])
+    if any(np.abs(X[inverse == k] - x[k]).max() > 1e-9 for k in range(len(labels))):
+        raise InputError("regression: rows of one instance have different latent vectors")
+    y = np.stack([Y[inverse == k].mean(axis=0) for k in range(len(labels))])
+    return labels, x, y
+
+
+@dataclass(frozen=True)
+class KernelRidgeRegressor:
+    """y(x) = intercept + sum_i dual_i exp(-|x - x_i|^2 / (2 length_scale^2)) over the training instances."""
+
+    x_train: np.ndarray  # (m, q)
+    dual: np.ndarray  # (m, D)
+    intercept: np.ndarray  # (D,)
+    length_scale: float
+    alpha: float
+
+    def predict(self, x) -> np.ndarray:
+        x = real_array(x, "latent vector", f"({self.x_train.shape[1]},) or (n, {self.x_train.shape[1]}) array")
+        single = x.ndim == 1
+        x = np.atleast_2d(x)
+        if x.ndim != 2 or x.shape[1] != self.x_train.shape[1] or not np.all(np.isfinite(x)):
+            raise InputError(f"latent vector: expected finite ({self.x_train.shape[1]},) values, got {x.shape}")
+        k = np.exp(-_sqdist(x, self.x_train) / (2.0 * self.length_scale ** 2))
+        y = self.intercept + k @ self.dual
+        return y[0] if single else y
+
+
+def _sqdist(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return np.maximum((a * a).sum(1)[:, None] + (b * b).sum(1)[None, :] - 2.0 * a @ b.T, 0.0)
+
+
+def fit_kernel_ridge(X, Y, *, length_scale: float, alpha: float, groups=None) -> KernelRidgeRegressor:
+    """Kernel ridge (Gaussian kernel of width ``length_scale`` in latent units) on the instances' mean
+    descriptors (``groups``; default every row its own instance), around their mean:
+    dual = (K + alpha I)^-1 (y - mean y)."""
+    if not (np.isfinite(length_scale) and length_scale > 0):
+        raise InputError(f"regression: length_scale must be positive, got {length_scale}")
+    alpha = non_negative(alpha, "regression: alpha")
+    groups = np.arange(len(np.asarray(X))) if groups is None else groups
+    _, x, y = instance_means(X, Y, groups)
+    b = y.mean(axis=0)
+    K = np.exp(-_sqdist(x, x) / (2.0 * float(length_scale) ** 2))
+    dual = np.linalg.solve(K + max(alpha, 1e-12) * np.eye(len(x)), y - b)
+    return KernelRidgeRegressor(x, dual, b, float(length_scale), float(alpha))
+
+
+@dataclass(frozen=True)
+class NearestInstanceRegressor:
+    """y(x) = the mean descriptor of the training instance nearest to x in the latent space."""
+
+    x_train: np.ndarray
+    y_train: np.ndarray
+
+    def predict(self, x) -> np.ndarray:
+        x = real_array(x, "latent vector", "(q,) or (n, q) array")
+        single = x.ndim == 1
+        x = np.atleast_2d(x)
+        if x.shape[1] != self.x_train.shape[1] or not np.all(np.isfinite(x)):
+            raise InputError(f"latent vector: expected finite ({self.x_train.shape[1]},) values, got {x.shape}")
+        y = self.y_train[np.argmin(_sqdist(x, self.x_train), axis=1)]
+        return y[0] if single else y
+
+
+def fit_nearest(X, Y, *, groups=None) -> NearestInstanceRegressor:
+    groups = np.arange(len(np.asarray(X))) if groups is None else groups
+    _, x, y = instance_means(X, Y, groups)
+    return NearestInstanceRegressor(x, y)
+
+
+#: The regressors a category model may use: name -> (fit function, hyperparameter grid).
+REGRESSOR_GRID: dict = {
+    "mean": (lambda X, Y, g: fit_ridge(X, Y, alpha=1e12, groups=g), [{}]),
+    "nearest": (lambda X, Y, g: fit_nearest(X, Y, groups=g), [{}]),
+    "ridge": (lambda X, Y, g, alpha: fit_ridge(X, Y, alpha=alpha, groups=g),
+              [{"alpha": a} for a in (0.1, 1.0, 10.0, 100.0)]),
+    "kernel_ridge": (lambda X, Y, g, length_scale, alpha: fit_kernel_ridge(X, Y, length_scale=length_scale,
+                                                                          alpha=alpha, groups=g),
+                     [{"length_scale": ell, "alpha": a} for ell in (0.5, 1.0, 2.0, 4.0) for a in (0.01, 0.1, 1.0)]),
+}
+
+
+def leave_one_instance_out(X, Y, groups, fit, error) -> float:
+    """Mean over instances of ``error(prediction at the instance's x, that instance's rows)`` with
+    ``fit(X, Y, groups)`` trained on the other instances."""
+    g = np.asarray(groups)
+    errs = []
+    for label in np.unique(g):
+        keep = g != label
+        model = fit(X[keep], Y[keep], g[keep])
+        errs.append(float(error(model.predict(X[g == label][0]), Y[g == label])))
+    return float(np.mean(errs))
+
+
+def select_regressor(X, Y, groups, error, names=tuple(REGRESSOR_GRID)) -> tuple[str, dict, float]:
+    """``(name, hyperparameters, LOO error)`` of the candidate (``names`` x their grids) with the least
+    leave-one-instance-out ``error`` on ``(X, Y, groups)``."""
+    best = None
+    for name in names:
+        fit, grid = REGRESSOR_GRID[name]
+        for h in grid:
+            e = leave_one_instance_out(X, Y, groups, lambda a, b, c, h=h, fit=fit: fit(a, b, c, **h), error)
+            if best is None or e < best[2] - 1e-15:
+                best = (name, h, e)
+    return best
+
+
+def nested_loo_error(X, Y, groups, error, names) -> float:
+    """The honest error of :func:`select_regressor`: every instance predicted by the candidate chosen by
+    leave-one-instance-out on the OTHER instances (so the choice never saw it)."""
+    g = np.asarray(groups)
+    errs = []
+    for label in np.unique(g):
+        keep = g != label
+        name, h, _ = select_regressor(X[keep], Y[keep], g[keep], error, names)
+        model = REGRESSOR_GRID[name][0](X[keep], Y[keep], g[keep], **h)
+        errs.append(float(error(model.predict(X[g == label][0]), Y[g == label])))
+    return float(np.mean(errs))

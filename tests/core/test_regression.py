@@ -48,3 +48,63 @@ def test_bad_input():
     reg = fit_ridge(np.eye(3), np.eye(3))
     with pytest.raises(InputError, match="expects 3"):
         reg.predict(np.zeros(2))
+
+
+# ----------------------------------------------------------------------------- shape-dependent regressors
+def _grasps_determined_by_shape(seed=0, n_instances=14, rows=3, noise=0.02, linear=False):
+    """Seeded instances: latent x (q = 3) determines the grasp descriptor (D = 4), plus a little noise."""
+    from catgrasp_drake.core.regression import instance_means  # noqa: F401  (the API under test)
+
+    rng = np.random.default_rng(seed)
+    x = rng.normal(size=(n_instances, 3))
+    if linear:
+        y = x @ rng.normal(size=(3, 4))
+    else:
+        y = np.column_stack([np.sin(2 * x[:, 0]), np.cos(1.5 * x[:, 1]), x[:, 0] * x[:, 2], np.tanh(x[:, 1])])
+    X = np.repeat(x, rows, axis=0)
+    Y = np.repeat(y, rows, axis=0) + noise * rng.normal(size=(n_instances * rows, 4))
+    return X, Y, np.repeat(np.arange(n_instances), rows)
+
+
+def _err(pred, rows):
+    return float(np.mean(np.linalg.norm(rows - pred, axis=1)))
+
+
+def test_kernel_ridge_recovers_a_nonlinear_shape_to_grasp_map_that_ridge_and_the_mean_miss():
+    from catgrasp_drake.core.regression import REGRESSOR_GRID as G
+    from catgrasp_drake.core.regression import leave_one_instance_out, nested_loo_error, select_regressor
+
+    X, Y, g = _grasps_determined_by_shape(n_instances=30)
+    errors = {name: min(leave_one_instance_out(X, Y, g, lambda a, b, c, h=h, f=G[name][0]: f(a, b, c, **h), _err)
+                        for h in G[name][1]) for name in G}
+    assert errors["kernel_ridge"] < 0.6 * errors["ridge"] and errors["kernel_ridge"] < 0.6 * errors["mean"]
+    assert errors["kernel_ridge"] < errors["nearest"]
+    name, h, e = select_regressor(X, Y, g, _err)
+    assert name == "kernel_ridge" and e == pytest.approx(errors["kernel_ridge"])
+    honest = nested_loo_error(X, Y, g, _err, tuple(G))
+    assert e <= honest < errors["mean"]  # the nested figure is no better than the selection's own
+
+
+def test_on_a_linear_map_ridge_is_as_good_as_any_and_the_mean_is_worse():
+    from catgrasp_drake.core.regression import select_regressor
+
+    X, Y, g = _grasps_determined_by_shape(seed=3, linear=True)
+    name, _, e = select_regressor(X, Y, g, _err)
+    _, _, e_mean = select_regressor(X, Y, g, _err, names=("mean",))
+    assert name in ("ridge", "kernel_ridge") and e < 0.3 * e_mean
+
+
+def test_kernel_ridge_fits_instance_means_and_rejects_bad_input():
+    from catgrasp_drake.core.regression import fit_kernel_ridge, fit_nearest, instance_means
+
+    X, Y, g = _grasps_determined_by_shape(n_instances=6, noise=0.0)
+    labels, x, y = instance_means(X, Y, g)
+    model = fit_kernel_ridge(X, Y, length_scale=1.0, alpha=1e-10, groups=g)
+    np.testing.assert_allclose(model.predict(x), y, atol=1e-6)  # interpolates with alpha -> 0
+    np.testing.assert_allclose(fit_nearest(X, Y, groups=g).predict(x[2] + 1e-3), y[2])
+    with pytest.raises(InputError, match="length_scale"):
+        fit_kernel_ridge(X, Y, length_scale=0.0, alpha=1.0, groups=g)
+    with pytest.raises(InputError, match="different latent"):
+        instance_means(X + np.arange(len(X))[:, None], Y, g)
+    with pytest.raises(InputError, match="latent vector"):
+        model.predict([1.0, 2.0])
