@@ -9,15 +9,15 @@ middle of the closing, lift, hold, shake, press, end) and render the scene
 there from two cameras aimed at the object's starting place, so a person sees
 at a glance where a grasp went wrong (pushed over on the way in, turned while
 closing, slipped while shaken). Each tile is labelled with the phase, the
-time, and the object's rise (cm) and tilt (deg) against its start; the title
-holds the verdict. The simulation is the same as without the film (the
+time, and the object's rise (cm) and tilt (deg) against its start (on the
+first row; the others name their view); the title holds the verdict. The simulation is the same as without the film (the
 plant's updates are periodic; a test checks the outcome).
 
 Views (``FILM_VIEWS``): ``(name, azimuth_deg, elevation_deg)`` about the
 object's starting position, azimuth measured in the world from the
 direction of the arm's base seen from the object (so the arm does not hide
-the hand: "left" and "right" see the grasp in profile, "above" from high
-over the far side of the table), 0.7 m away, aimed 10 cm above the object's base.
+the hand: "left" and "right" see the grasp in profile; a view from above
+is hidden by the forearm), 0.7 m away, aimed 10 cm above the object's base.
 """
 
 from __future__ import annotations
@@ -36,8 +36,7 @@ from catgrasp_drake.trial import run_grasp_trial
 from catgrasp_drake.viz.render import contact_sheet, render_color
 
 #: (name, azimuth from the object-to-arm-base direction (deg), elevation (deg)).
-FILM_VIEWS: tuple[tuple[str, float, float], ...] = (("left", 90.0, 15.0), ("right", -90.0, 15.0),
-                                                   ("above", 180.0, 75.0))
+FILM_VIEWS: tuple[tuple[str, float, float], ...] = (("left", 90.0, 15.0), ("right", -90.0, 15.0))
 FILM_DISTANCE_M = 0.7
 FILM_TARGET_HEIGHT_M = 0.10
 FILM_FOV_DEG = 45.0
@@ -81,8 +80,7 @@ class Film:
         for v, (name, _, _) in enumerate(self.views):
             for label, t, rise, tilt, frame in self.frames:
                 images.append(frame[v])
-                labels.append(f"{label} {t:.1f}s rise {100 * rise:.1f}cm tilt {tilt:.0f}deg"
-                              if v == 0 else f"{name} view")
+                labels.append(f"{label} {t:.1f}s {100 * rise:+.1f}cm {tilt:.0f}deg" if v == 0 else f"{name} view")
         contact_sheet(images, labels, path, columns=len(self.frames), title=title)
 
 
