@@ -112,6 +112,14 @@ def watertight_for_mass(mesh: trimesh.Trimesh) -> tuple[trimesh.Trimesh, str]:
     return m.convex_hull, "convex_hull"
 
 
+def _manifold(mesh: trimesh.Trimesh):
+    """``mesh`` as a manifold3d solid (single precision, as manifold3d stores it)."""
+    import manifold3d
+
+    return manifold3d.Manifold(manifold3d.Mesh(vert_properties=np.asarray(mesh.vertices, np.float32),
+                                               tri_verts=np.asarray(mesh.faces, np.uint32)))
+
+
 def flatten_base(mesh: trimesh.Trimesh, depth_m: float) -> tuple[trimesh.Trimesh, bool]:
     """``mesh`` (upright: z up, base at its lowest point) with its lowest ``depth_m`` cut off by a
     horizontal plane and the cut closed flat (manifold3d's ``trim_by_plane``), then moved down by
@@ -128,8 +136,7 @@ def flatten_base(mesh: trimesh.Trimesh, depth_m: float) -> tuple[trimesh.Trimesh
         return mesh, False
     lo = float(mesh.bounds[0][2])
     try:
-        solid = manifold3d.Manifold(manifold3d.Mesh(vert_properties=np.asarray(mesh.vertices, np.float32),
-                                                    tri_verts=np.asarray(mesh.faces, np.uint32)))
+        solid = _manifold(mesh)
     except Exception:  # noqa: BLE001 -- manifold3d raises its own types for non-manifold input
         return mesh, False
     if solid.is_empty() or solid.status() != manifold3d.Error.NoError:
@@ -159,7 +166,6 @@ def bridge_gaps(mesh: trimesh.Trimesh, max_gap_m: float = MAX_BRIDGED_GAP_M) -> 
     neck closes on nothing. The bridge is a convex stand-in for the unseen part, no wider than what the
     scan saw next to it.
     """
-    import manifold3d
 
     pieces = [p for p in mesh.split(only_watertight=False) if len(p.faces) >= MIN_PIECE_FACES]
     if len(pieces) < 2 or not all(p.is_watertight for p in pieces):
@@ -181,13 +187,9 @@ def bridge_gaps(mesh: trimesh.Trimesh, max_gap_m: float = MAX_BRIDGED_GAP_M) -> 
     if not bridges:
         return mesh, 0
 
-    def manifold(m):
-        return manifold3d.Manifold(manifold3d.Mesh(vert_properties=np.asarray(m.vertices, np.float32),
-                                                   tri_verts=np.asarray(m.faces, np.uint32)))
-
-    solid = manifold(pieces[0])
+    solid = _manifold(pieces[0])
     for p in pieces[1:] + bridges:
-        solid = solid + manifold(p)
+        solid = solid + _manifold(p)
     out = solid.to_mesh()
     joined = trimesh.Trimesh(np.asarray(out.vert_properties[:, :3], float), np.asarray(out.tri_verts), process=True)
     if not joined.is_watertight:
