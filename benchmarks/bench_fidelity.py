@@ -60,9 +60,7 @@ def parse_setting(text: str) -> dict:
 
 def fidelity_task(spec: dict) -> dict:
     """One reference trial at one setting -> outcome and timing (module level: runs in workers)."""
-    from handwritten_sweep import varied
-
-    from catgrasp_drake.station.handwritten import load_handwritten_motion
+    from catgrasp_drake.station.handwritten import load_handwritten_motion, shifted_motion
     from catgrasp_drake.station.scenario import load_scenario, with_instance
     from catgrasp_drake.trial import run_grasp_trial
 
@@ -71,7 +69,7 @@ def fidelity_task(spec: dict) -> dict:
     scenario = base.replace(plant=replace(base.plant, **spec["plant"]))
     motion = load_handwritten_motion(category, instance)
     if spec["shifted"]:
-        motion = varied(motion, category, instance, SHIFT_O, (0.0, 0.0, 0.0))
+        motion = shifted_motion(motion, category, instance, SHIFT_O)
     t0 = time.perf_counter()
     r = run_grasp_trial(scenario, motion)
     return {"grasp": r.grasp_success, "functional": r.functional_success, "reason": r.failure_reason,

@@ -359,6 +359,7 @@ def _cmd_film(args) -> int:
     if args.record:
         from catgrasp_drake.benchmark.report import load_benchmark_records
         from catgrasp_drake.benchmark.runner import film_benchmark_trial
+        from catgrasp_drake.film import verdict_word
 
         records = load_benchmark_records([args.record])
         if not 0 <= args.index < len(records):
@@ -367,15 +368,15 @@ def _cmd_film(args) -> int:
         out = Path(args.out or f"out/film/{record['instance']}_t{record['trial']}_{record['method']}.png")
         result, spec = film_benchmark_trial(record, out, data_dir=args.data,
                                             objects=[args.object] if args.object else ())
-        then = "functional" if record["functional"] else "grasped" if record["grasp"] else "failed"
-        now = "functional" if result.functional_success else "grasped" if result.grasp_success else "failed"
+        then = verdict_word(record["grasp"], record["functional"])
+        now = verdict_word(result.grasp_success, result.functional_success)
         same = "" if (then, spec["model_sha256"]) == (now, record["model_sha256"]) else (
             f" -- the record says {then}" + (" (its model file has changed since)"
                                                if spec["model_sha256"] != record["model_sha256"] else ""))
         print(f"wrote {out}: {now} ({result.failure_reason or 'ok'}){same}")
         return 0
     from catgrasp_drake.demo import imported_object
-    from catgrasp_drake.film import film_grasp
+    from catgrasp_drake.film import film_grasp, verdict_word
     from catgrasp_drake.station.handwritten import load_handwritten_motion, shifted_motion
     from catgrasp_drake.station.scenario import load_scenario, random_placement, with_instance
 
@@ -399,8 +400,9 @@ def _cmd_film(args) -> int:
         motion = shifted_motion(motion, category, instance, args.shift, annotations_dir=args.object)
     out = Path(args.out or f"out/film/{instance}_handwritten.png")
     result = film_grasp(scenario, motion, out)
-    verdict = "functional" if result.functional_success else "grasped" if result.grasp_success else "failed"
-    print(f"wrote {out}: {verdict} ({result.failure_reason or 'ok'}{': ' + result.detail if result.detail else ''})")
+    detail = f": {result.detail}" if result.detail else ""
+    print(f"wrote {out}: {verdict_word(result.grasp_success, result.functional_success)} "
+          f"({result.failure_reason or 'ok'}{detail})")
     return 0
 
 
@@ -424,14 +426,16 @@ def _cmd_search_grasp(args) -> int:
         if name not in VARIATION_NAMES:
             raise InputError(f"--freeze: unknown parameter {name!r}; known: {', '.join(VARIATION_NAMES)}")
         std[VARIATION_NAMES.index(name)] = 0.0
-    grasp_file = Path(args.grasp or GRASPS_DIR / f"{args.category}_handwritten.yaml")
+    grasp_file = Path(args.grasp) if args.grasp else GRASPS_DIR / f"{args.category}_handwritten.yaml"
+    if not grasp_file.is_file():
+        raise InputError(f"--grasp: no such grasp file {grasp_file}")
     bar = _Progress()
     total = args.rounds
     result = search_grasp(args.category, chosen, cem=CemParams(rounds=args.rounds, population=args.population,
                                                                  elite=args.elite, seed=args.seed),
                           robustness=Robustness(perturbations=args.perturbations, seed=args.seed,
                                                 mass_scale=tuple(args.mass_scale)), search_std=std,
-                          grasp_file=str(grasp_file), cache_dir=args.cache, workers=args.workers, ray=args.ray,
+                          grasp_file=args.grasp, cache_dir=args.cache, workers=args.workers, ray=args.ray,
                           progress=lambda k, X, s: bar(f"rounds (best so far {max(s):.2f})", k + 1, total))
     out = Path(args.out or f"out/grasp_search/{args.category}")
     spec = yaml.safe_load(grasp_file.read_text())

@@ -28,7 +28,6 @@ retrained model never reuses trials of the old one.
 
 from __future__ import annotations
 
-import hashlib
 import json
 import time
 from dataclasses import asdict, dataclass, field
@@ -39,7 +38,7 @@ import numpy as np
 
 from catgrasp_drake.baselines import METHODS, predict_grasp
 from catgrasp_drake.category_model import CategoryModel
-from catgrasp_drake.core.fileio import atomic_write_text, read_json_lines, text_sha256, write_json_lines
+from catgrasp_drake.core.fileio import atomic_write_text, file_sha256, read_json_lines, text_sha256, write_json_lines
 from catgrasp_drake.data.dataset import list_instances
 from catgrasp_drake.errors import InputError, ModelFileError, one_line
 from catgrasp_drake.runner import code_fingerprint, run_tasks
@@ -148,10 +147,6 @@ def fold_model(config: EvalConfig, fold: int, train: list[str], progress=None) -
                         cache_dir=str(Path(config.out_dir) / "training_trials"))
     train_category(config.category, train, tc, progress=progress).save(path)
     return path
-
-
-def file_sha256(path: str | Path) -> str:
-    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
 
 def trial_specs(config: EvalConfig, models: dict[int, str], folds) -> list[dict]:

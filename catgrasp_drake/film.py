@@ -32,7 +32,9 @@ from catgrasp_drake.core.visibility import camera_on_sphere_position
 from catgrasp_drake.errors import InputError
 from catgrasp_drake.planning.records import PlanParams
 from catgrasp_drake.station.builder import RENDERER_NAME, StationHandles
-from catgrasp_drake.trial import run_grasp_trial
+from catgrasp_drake.station.judge import tilt_deg
+from catgrasp_drake.transfer import run_transfer
+from catgrasp_drake.trial import run_grasp_trial, trial_diagram
 from catgrasp_drake.viz.render import contact_sheet, render_color
 
 #: (name, azimuth from the object-to-arm-base direction (deg), elevation (deg)).
@@ -40,6 +42,13 @@ FILM_VIEWS: tuple[tuple[str, float, float], ...] = (("left", 90.0, 15.0), ("righ
 FILM_DISTANCE_M = 0.7
 FILM_TARGET_HEIGHT_M = 0.10
 FILM_FOV_DEG = 45.0
+#: Size (w, h) of one frame, pixels.
+FILM_TILE = (180, 180)
+
+
+def verdict_word(grasp_success: bool, functional_success: bool) -> str:
+    """"functional", "grasped" (held, the function missed) or "failed"."""
+    return "functional" if functional_success else "grasped" if grasp_success else "failed"
 
 
 @dataclass
@@ -47,10 +56,10 @@ class Film:
     """Collects the frames of one trial: ``film(label, root_context)`` renders every view."""
 
     station: StationHandles
-    size: tuple[int, int] = (180, 180)
+    size: tuple[int, int] = FILM_TILE
     views: tuple[tuple[str, float, float], ...] = FILM_VIEWS
     frames: list = field(default_factory=list)  # (label, t, rise_m, tilt_deg, [image per view])
-    _X_WO0: np.ndarray | None = None
+    _X_WO0: np.ndarray | None = field(default=None, init=False, repr=False)  # the object's pose in frame 0
 
     def __call__(self, label: str, context) -> None:
         h = self.station
@@ -60,7 +69,6 @@ class Film:
             self._X_WO0 = X_WO
         X0 = self._X_WO0
         rise = float(X_WO[2, 3] - X0[2, 3])
-        cos_tilt = float(np.clip(X_WO[:3, 2] @ X0[:3, 2], -1.0, 1.0))
         query = h.scene_graph.get_query_output_port().Eval(h.scene_graph.GetMyContextFromRoot(context))
         target = X0[:3, 3] + np.array([0.0, 0.0, FILM_TARGET_HEIGHT_M])
         to_arm = h.scenario.arm_base.matrix()[:3, 3] - X0[:3, 3]
@@ -70,7 +78,7 @@ class Film:
             eye = camera_on_sphere_position(target, FILM_DISTANCE_M, yaw0 + math.radians(az), math.radians(el))
             images.append(render_color(query, h.scene_graph.world_frame_id(), eye, target, self.size, FILM_FOV_DEG,
                                        renderer=RENDERER_NAME))
-        self.frames.append((label, float(context.get_time()), rise, math.degrees(math.acos(cos_tilt)), images))
+        self.frames.append((label, float(context.get_time()), rise, tilt_deg(X0, X_WO), images))
 
     def write(self, path: str | os.PathLike, title: str) -> None:
         """One PNG: a column per phase, a row per view (atomic write)."""
@@ -85,40 +93,30 @@ class Film:
 
 
 def _title(what: str, result) -> str:
-    verdict = ("functional" if result.functional_success else "grasped, not functional" if result.grasp_success
-               else "failed")
+    verdict = verdict_word(result.grasp_success, result.functional_success)
+    verdict = "grasped, not functional" if verdict == "grasped" else verdict
     reason = f" ({result.failure_reason}: {result.detail})" if result.failure_reason else ""
     return f"{what}: {verdict}{reason}"[:240]
 
 
-def film_grasp(scenario, motion_O, path: str | os.PathLike, *, size: tuple[int, int] = (180, 180),
+def film_grasp(scenario, motion_O, path: str | os.PathLike, *, size: tuple[int, int] = FILM_TILE,
                params: PlanParams = PlanParams()):
     """Run ``motion_O`` (object frame) as :func:`catgrasp_drake.trial.run_grasp_trial` does, film it into
     ``path`` (PNG) and return the :class:`~catgrasp_drake.trial.TrialResult`. A plan that fails writes
     the start frame only, titled with the planner's reason."""
-    from catgrasp_drake.trial import trial_diagram
-
-    film = Film(trial_diagram(scenario).station, size=size)
+    td = trial_diagram(scenario)  # the diagram run_grasp_trial runs (cached per scenario)
+    film = Film(td.station, size=size)
     result = run_grasp_trial(scenario, motion_O, params=params, on_phase=film)
     name = f"{scenario.object.category or ''} {scenario.object.instance or scenario.name}".strip()
     if not film.frames:
-        _film_start(film, scenario)
+        film("start (no motion)", td.diagram.CreateDefaultContext())
     film.write(path, _title(name, result))
     return result
 
 
-def _film_start(film: Film, scenario) -> None:
-    from catgrasp_drake.trial import trial_diagram
-
-    td = trial_diagram(scenario)
-    film("start (no motion)", td.diagram.CreateDefaultContext())
-
-
-def film_transfer(td, path: str | os.PathLike, *, size: tuple[int, int] = (180, 180), title: str = ""):
+def film_transfer(td, path: str | os.PathLike, *, size: tuple[int, int] = FILM_TILE, title: str = ""):
     """Run the transfer diagram ``td`` (:func:`catgrasp_drake.transfer.run_transfer`), film it into ``path``
     (PNG) and return the :class:`~catgrasp_drake.transfer.TransferResult`."""
-    from catgrasp_drake.transfer import run_transfer
-
     film = Film(td.station, size=size)
     result = run_transfer(td, on_phase=film)
     if not film.frames:

@@ -28,12 +28,15 @@ result is a reviewable diff of ``models/grasps/<category>_handwritten.yaml``.
 from __future__ import annotations
 
 import math
+import time
+import zlib
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from catgrasp_drake.core.fileio import file_sha256
 from catgrasp_drake.errors import InputError
 from catgrasp_drake.grasping.constraints import load_constraint
 from catgrasp_drake.grasping.search import CemParams, cem_maximize
@@ -70,8 +73,6 @@ def perturbation(robustness: Robustness, instance: str, k: int) -> dict:
     """The ``k``-th perturbation of ``instance`` (k = 0: nominal): a JSON-able dict, seeded by (seed, instance, k)."""
     if k == 0:
         return {"dx": 0.0, "dy": 0.0, "dyaw_deg": 0.0, "friction": None, "mass_scale": 1.0}
-    import zlib
-
     rng = np.random.default_rng([robustness.seed, zlib.crc32(instance.encode()), k, 18])
     r = robustness.shift_m * math.sqrt(rng.uniform())
     a = rng.uniform(0, 2 * math.pi)
@@ -134,10 +135,10 @@ def search_grasp(category: str, instances, *, cem: CemParams = CemParams(), robu
 
     ``search_std``: the initial spread per variation parameter (default
     :data:`~catgrasp_drake.station.variation.VARIATION_SCALE`; 0 freezes a
-    parameter). ``progress(round, candidates, scores)`` after each round.
+    parameter). ``grasp_file``: the grasp to start from (default the category's
+    ``models/grasps/<category>_handwritten.yaml``); its content is part of every trial's cache key.
+    ``progress(round, candidates, scores)`` after each round.
     """
-    import time
-
     from catgrasp_drake.runner import code_fingerprint, run_tasks
 
     instances = tuple(instances)
@@ -147,12 +148,14 @@ def search_grasp(category: str, instances, *, cem: CemParams = CemParams(), robu
     root = Path(__file__).resolve().parents[1]
     version = code_fingerprint([root / "catgrasp_drake", root / "models"])
     perturbations = [(i, perturbation(robustness, i, k)) for i in instances for k in range(robustness.perturbations)]
+    # a grasp file outside models/ is not in the code fingerprint: its content keys the trials
+    start = {} if grasp_file is None else {"grasp_file": str(grasp_file), "grasp_sha256": file_sha256(grasp_file)}
     rounds = []
     t0 = time.perf_counter()
 
     def evaluate(X: np.ndarray) -> np.ndarray:
-        specs = [{"task": TASK, "category": category, "instance": i, "perturbation": p,
-                  "variation": [round(float(x), 6) for x in v], "grasp_file": grasp_file}
+        specs = [start | {"task": TASK, "category": category, "instance": i, "perturbation": p,
+                          "variation": [round(float(x), 6) for x in v]}
                  for v in X for i, p in perturbations]
         outcomes = run_tasks(search_trial_task, specs, cache_dir=cache_dir, code_version=version, workers=workers,
                              ray_address=ray)

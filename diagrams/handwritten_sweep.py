@@ -31,7 +31,7 @@ CATEGORIES = ("drill", "spray_bottle", "mug")
 
 def sweep_task(spec: dict) -> dict:
     """One trial: ``{"category", "instance"}`` -> JSON-able outcome (module-level: runs in workers)."""
-    from catgrasp_drake.station.handwritten import load_handwritten_motion
+    from catgrasp_drake.station.handwritten import load_handwritten_motion, shifted_motion
     from catgrasp_drake.station.scenario import load_scenario
     from catgrasp_drake.trial import run_grasp_trial
 
@@ -40,7 +40,8 @@ def sweep_task(spec: dict) -> dict:
     scenario = replace(base, name=f"{category}_default:{instance}", object=replace(base.object, instance=instance))
     motion = load_handwritten_motion(category, instance)
     if spec.get("shift") or spec.get("rotate"):
-        motion = varied(motion, category, instance, spec.get("shift") or (0, 0, 0), spec.get("rotate") or (0, 0, 0))
+        motion = shifted_motion(motion, category, instance, spec.get("shift") or (0, 0, 0),
+                                spec.get("rotate") or (0, 0, 0))
     r = run_grasp_trial(scenario, motion)
     return {
         "grasp": r.grasp_success, "functional": r.functional_success, "reason": r.failure_reason,
@@ -50,13 +51,6 @@ def sweep_task(spec: dict) -> dict:
         "trigger_force_N": r.trigger_force_N, "in_hand_shift_m": r.in_hand_shift_m,
         "in_hand_turn_deg": r.in_hand_turn_deg,
     }
-
-
-def varied(motion, category: str, instance: str, shift_O, rotate_deg):
-    """``motion`` turned by ``rotate_deg`` about the functional region's centre, then moved by ``shift_O``."""
-    from catgrasp_drake.station.handwritten import shifted_motion
-
-    return shifted_motion(motion, category, instance, shift_O, rotate_deg)
 
 
 def _fmt(value, width: int, digits: int, scale: float = 1.0) -> str:

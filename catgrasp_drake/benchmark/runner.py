@@ -40,11 +40,10 @@ from pathlib import Path
 
 import numpy as np
 
-from catgrasp_drake.core.fileio import atomic_write_text
+from catgrasp_drake.core.fileio import atomic_write_text, file_sha256
 from catgrasp_drake.core.visibility import camera_on_sphere_position
 from catgrasp_drake.data.dataset import CATEGORIES
 from catgrasp_drake.errors import InputError
-from catgrasp_drake.evaluation import file_sha256
 from catgrasp_drake.transfer import VIEWS
 
 #: The test split's data-set seed. Fixed; nothing (grasps, kernels, thresholds) is chosen on it.

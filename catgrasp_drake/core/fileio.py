@@ -132,6 +132,11 @@ def load_arrays(
 
 
 # ----------------------------------------------------------------------------- checksummed JSON lines
+def file_sha256(path: str | os.PathLike) -> str:
+    """sha256 (hex) of a file's bytes."""
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
 def text_sha256(text: str) -> str:
     """sha256 (hex) of ``text`` encoded as UTF-8."""
     return hashlib.sha256(text.encode("utf-8")).hexdigest()

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from catgrasp_drake.core.kernels import gaussian_kernel, sqdist
 from catgrasp_drake.core.validation import non_negative, real_array
 from catgrasp_drake.errors import InputError
 
@@ -125,13 +126,8 @@ class KernelRidgeRegressor:
         x = np.atleast_2d(x)
         if x.ndim != 2 or x.shape[1] != self.x_train.shape[1] or not np.all(np.isfinite(x)):
             raise InputError(f"latent vector: expected finite ({self.x_train.shape[1]},) values, got {x.shape}")
-        k = np.exp(-_sqdist(x, self.x_train) / (2.0 * self.length_scale ** 2))
-        y = self.intercept + k @ self.dual
+        y = self.intercept + gaussian_kernel(x, self.x_train, self.length_scale) @ self.dual
         return y[0] if single else y
-
-
-def _sqdist(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    return np.maximum((a * a).sum(1)[:, None] + (b * b).sum(1)[None, :] - 2.0 * a @ b.T, 0.0)
 
 
 def fit_kernel_ridge(X, Y, *, length_scale: float, alpha: float, groups=None) -> KernelRidgeRegressor:
@@ -144,7 +140,7 @@ def fit_kernel_ridge(X, Y, *, length_scale: float, alpha: float, groups=None) ->
     groups = np.arange(len(np.asarray(X))) if groups is None else groups
     _, x, y = instance_means(X, Y, groups)
     b = y.mean(axis=0)
-    K = np.exp(-_sqdist(x, x) / (2.0 * float(length_scale) ** 2))
+    K = gaussian_kernel(x, x, float(length_scale))
     dual = np.linalg.solve(K + max(alpha, 1e-12) * np.eye(len(x)), y - b)
     return KernelRidgeRegressor(x, dual, b, float(length_scale), float(alpha))
 
@@ -162,7 +158,7 @@ class NearestInstanceRegressor:
         x = np.atleast_2d(x)
         if x.shape[1] != self.x_train.shape[1] or not np.all(np.isfinite(x)):
             raise InputError(f"latent vector: expected finite ({self.x_train.shape[1]},) values, got {x.shape}")
-        y = self.y_train[np.argmin(_sqdist(x, self.x_train), axis=1)]
+        y = self.y_train[np.argmin(sqdist(x, self.x_train), axis=1)]
         return y[0] if single else y
 
 

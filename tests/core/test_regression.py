@@ -53,8 +53,6 @@ def test_bad_input():
 # ----------------------------------------------------------------------------- shape-dependent regressors
 def _grasps_determined_by_shape(seed=0, n_instances=14, rows=3, noise=0.02, linear=False):
     """Seeded instances: latent x (q = 3) determines the grasp descriptor (D = 4), plus a little noise."""
-    from catgrasp_drake.core.regression import instance_means  # noqa: F401  (the API under test)
-
     rng = np.random.default_rng(seed)
     x = rng.normal(size=(n_instances, 3))
     if linear:

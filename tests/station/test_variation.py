@@ -60,3 +60,35 @@ def test_perturbations_are_seeded_within_their_ranges_and_the_first_is_nominal()
     assert trial_score({"grasp": True, "functional": True}, 0.2) == 1.0
     assert trial_score({"grasp": True, "functional": False}, 0.2) == 0.2
     assert trial_score({"grasp": False, "functional": False}, 0.2) == 0.0
+
+
+def test_the_search_scores_candidates_by_their_trials_and_keys_a_given_grasp_file_by_its_content(tmp_path,
+                                                                                                 monkeypatch):
+    import hashlib
+    import shutil
+    from types import SimpleNamespace
+
+    import catgrasp_drake.runner as runner
+    from catgrasp_drake.grasp_search import search_grasp
+    from catgrasp_drake.grasping.search import CemParams
+
+    seen = []
+
+    def fake_run_tasks(fn, specs, **kw):  # functional exactly when the hand is moved up (dz > 0)
+        seen.extend(specs)
+        return [SimpleNamespace(result={"grasp": True, "functional": s["variation"][2] > 0}) for s in specs]
+
+    monkeypatch.setattr(runner, "run_tasks", fake_run_tasks)
+    grasp = tmp_path / "mine.yaml"
+    shutil.copy(GRASPS_DIR / "mug_handwritten.yaml", grasp)
+    result = search_grasp("mug", ["mug_00", "mug_02"], cem=CemParams(rounds=2, population=6, elite=2, seed=1),
+                          robustness=Robustness(perturbations=2), grasp_file=str(grasp), cache_dir=None)
+    assert result.start_score == pytest.approx(0.2)  # the grasp as written: held, not functional, 4 of 4 trials
+    assert result.best["dz"] > 0 and result.best_score == pytest.approx(1.0)
+    assert result.trials == 2 * 6 * 4 == len(seen)
+    assert {s["grasp_sha256"] for s in seen} == {hashlib.sha256(grasp.read_bytes()).hexdigest()}
+    for entry in result.rounds[0]:  # every candidate's score is the mean of its own trials
+        assert entry["score"] == pytest.approx(1.0 if entry["variation"]["dz"] > 0 else 0.2)
+    seen.clear()
+    search_grasp("mug", ["mug_00"], cem=CemParams(rounds=1, population=2, elite=1), cache_dir=None)
+    assert all("grasp_sha256" not in s and "grasp_file" not in s for s in seen)  # the default: in the fingerprint
