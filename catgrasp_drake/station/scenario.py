@@ -2,8 +2,8 @@
 
 Style of Drake's ``examples/hardware_sim`` and the manipulation course's
 ``station.py``: every field has a default, a YAML entry only states what
-differs, and one builder (:mod:`catgrasp_drake.station.builder`) turns a
-``Scenario`` into a diagram.
+differs (read by Drake's ``yaml_load_typed``), and one builder
+(:mod:`catgrasp_drake.station.builder`) turns a ``Scenario`` into a diagram.
 
 Frames and units (SI throughout, angles in DEGREES in the YAML and here,
 ``*_deg`` fields; Drake's extrinsic roll-pitch-yaw convention):
@@ -19,7 +19,7 @@ Frames and units (SI throughout, angles in DEGREES in the YAML and here,
   in the world frame.
 
 YAML format (a mapping ``name -> scenario``; omitted fields take the defaults
-below)::
+below; a malformed entry is an InputError naming the file, scenario and field)::
 
     drill_default:
       object: {category: drill, instance: drill_00, xyz: [0.0, 0.0, 0.0], yaw_deg: 0.0}
@@ -40,16 +40,18 @@ below)::
                xyz: [0.1, 0.0, 0.0]}
 """
 
-from __future__ import annotations
-
+# (No ``from __future__ import annotations``: Drake's YAML loader reads the dataclasses' field types.)
 import dataclasses
 import math
-from dataclasses import dataclass
+import typing
+from dataclasses import dataclass, field, fields, is_dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import yaml
+from pydrake.common.yaml import yaml_load_typed
+from pydrake.math import RigidTransform, RollPitchYaw
 
 from catgrasp_drake.core.visibility import look_at_matrix
 from catgrasp_drake.data.dataset import CATEGORIES, list_instances, load_annotations, read_annotations
@@ -57,6 +59,19 @@ from catgrasp_drake.errors import InputError, ModelFileError
 
 #: The project's scenario file.
 DEFAULT_SCENARIO_FILE = Path(__file__).resolve().parents[2] / "models" / "station.scenarios.yaml"
+
+# A field's rule, ``(ok(value) -> bool, what is expected)``, is checked on YAML input only (``_check``).
+_POSITIVE = (lambda v: v > 0, "a positive number")
+_NONNEG = (lambda v: v >= 0, "a non-negative number")
+
+
+def _one_of(*options: str):
+    return (lambda v: v in options, f"one of {options}")
+
+
+def _f(default, rule=None):
+    """A record field with a default and the rule its YAML value must pass."""
+    return field(default=default, metadata={"rule": rule} if rule else {})
 
 
 # ----------------------------------------------------------------------------- records
@@ -68,30 +83,21 @@ class Pose:
     rpy_deg: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
     def matrix(self) -> np.ndarray:
-        """The 4x4 homogeneous transform."""
-        r, p, y = np.radians(self.rpy_deg)
-        cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
-        R = np.array([
-            [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
-            [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
-            [-sp, cp * sr, cp * cr],
-        ])
-        X = np.eye(4)
-        X[:3, :3] = R
-        X[:3, 3] = self.xyz
-        return X
+        """The 4x4 homogeneous transform (C-ordered)."""
+        X = RigidTransform(RollPitchYaw(np.radians(self.rpy_deg)), np.array(self.xyz)).GetAsMatrix4()
+        return np.ascontiguousarray(X)
 
 
 @dataclass(frozen=True)
 class PrimitiveObject:
     """A primitive test object (model name ``cylinder``/``box``, one link ``body``, base on z = 0)."""
 
-    shape: str = "cylinder"  # "cylinder" (radius, length) or "box" (size)
-    radius: float = 0.02
-    length: float = 0.15
+    shape: str = _f("cylinder", _one_of("cylinder", "box"))  # "cylinder" (radius, length) or "box" (size)
+    radius: float = _f(0.02, _POSITIVE)
+    length: float = _f(0.15, _POSITIVE)
     size: tuple[float, float, float] = (0.05, 0.05, 0.15)
-    mass_kg: float = 0.2
-    friction: float = 0.9
+    mass_kg: float = _f(0.2, _POSITIVE)
+    friction: float = _f(0.9, _POSITIVE)
 
 
 @dataclass(frozen=True)
@@ -132,23 +138,23 @@ class TableSpec:
     """A box table; ``pose`` is the centre of its TOP surface (frame T)."""
 
     pose: Pose = Pose((0.55, 0.0, 0.0))
-    size: tuple[float, float, float] = (1.2, 1.4, 0.05)
-    friction: float = 0.6
-    hydroelastic_modulus: float = 1e7
+    size: tuple[float, float, float] = _f((1.2, 1.4, 0.05), (lambda v: min(v) > 0, "positive extents"))
+    friction: float = _f(0.6, _POSITIVE)
+    hydroelastic_modulus: float = _f(1e7, _POSITIVE)
 
 
 @dataclass(frozen=True)
 class CameraSpec:
     """A fixed depth camera (RgbdSensor with RenderEngineVtk)."""
 
-    name: str = "camera0"
+    name: str = _f("camera0", (str.isidentifier, "an identifier-like name"))
     X_WC: Pose | None = None
     look_at_eye: tuple[float, float, float] | None = (1.15, -0.45, 0.55)
     look_at_target: tuple[float, float, float] | None = (0.55, 0.0, 0.08)
-    width: int = 640
-    height: int = 480
-    fov_y_deg: float = 45.0
-    depth_range: tuple[float, float] = (0.1, 3.0)
+    width: int = _f(640, _POSITIVE)
+    height: int = _f(480, _POSITIVE)
+    fov_y_deg: float = _f(45.0, (lambda v: 0 < v < 180, "an angle in (0, 180)"))
+    depth_range: tuple[float, float] = _f((0.1, 3.0), (lambda v: 0 < v[0] < v[1], "0 < near < far"))
 
     def X_WC_matrix(self) -> np.ndarray:
         if self.X_WC is not None:
@@ -160,33 +166,35 @@ class CameraSpec:
 class ObjectCloudSpec:
     """Post-processing of the segmented camera cloud (world frame, metres)."""
 
-    voxel_size: float = 0.005
+    voxel_size: float = _f(0.005, _NONNEG)
     crop_min: tuple[float, float, float] = (-0.5, -1.0, -0.02)
     crop_max: tuple[float, float, float] = (1.5, 1.0, 1.0)
-    depth_noise_std: float = 0.0  # m; "kinect": the axial std at 1 m (it grows with depth squared)
-    seed: int = 0
-    depth_noise_model: str = "gaussian"  # or "kinect" (perception.object_cloud._mask_depth)
-    edge_dropout: float = 0.0  # "kinect": probability of dropping a silhouette / depth-jump pixel
+    depth_noise_std: float = _f(0.0, _NONNEG)  # m; "kinect": the axial std at 1 m (it grows with depth squared)
+    seed: int = _f(0, _NONNEG)
+    depth_noise_model: str = _f("gaussian", _one_of("gaussian", "kinect"))  # perception.object_cloud._mask_depth
+    #: "kinect": probability of dropping a silhouette / depth-jump pixel
+    edge_dropout: float = _f(0.0, (lambda v: 0 <= v <= 1, "a probability in [0, 1]"))
 
 
 @dataclass(frozen=True)
 class PlantSpec:
     """MultibodyPlantConfig fields the station sets."""
 
-    time_step: float = 5e-3
-    discrete_contact_approximation: str = "sap"
-    contact_model: str = "hydroelastic_with_fallback"
-    penetration_allowance: float = 1e-3
+    time_step: float = _f(5e-3, _POSITIVE)
+    discrete_contact_approximation: str = _f("sap", _one_of("sap", "tamsi", "similar", "lagged", ""))
+    contact_model: str = _f("hydroelastic_with_fallback",
+                            _one_of("hydroelastic_with_fallback", "hydroelastic", "point"))
+    penetration_allowance: float = _f(1e-3, _POSITIVE)
     #: Physics-sensitivity knobs (defaults: the station as tuned): the hand's effort limits times
     #: this factor (1/1.7: the real SVH's), and the object's Coulomb friction replaced (None: its SDF's).
-    hand_effort_scale: float = 1.0
-    object_friction: float | None = None
+    hand_effort_scale: float = _f(1.0, _POSITIVE)
+    object_friction: float | None = _f(None, _POSITIVE)
     #: Speed lever (issue 17): the hand's compliant-hydroelastic mesh resolution hint (m) replaced
     #: (None: the model's 6 mm); coarser tessellations mean fewer contact polygons for SAP.
-    hand_resolution_hint: float | None = None
+    hand_resolution_hint: float | None = _f(None, _POSITIVE)
     #: Robustness knob (grasp search): the object's mass (and with it its rotational inertia) times
     #: this factor, applied to the simulation context (``station.builder.apply_context_knobs``).
-    object_mass_scale: float = 1.0
+    object_mass_scale: float = _f(1.0, _POSITIVE)
 
 
 #: UR10 home configuration (rad): the robot model's home turned by pi about the base so the
@@ -216,243 +224,231 @@ class Scenario:
         return dataclasses.replace(self, **changes)
 
 
-# ----------------------------------------------------------------------------- parsing
-def _vec(value, n: int, where: str) -> tuple[float, ...]:
+# ----------------------------------------------------------------------------- YAML schema
+# ``yaml_load_typed`` sets attributes and reads sequences as lists, so it cannot fill the frozen,
+# tuple-valued records: it fills these mutable twins, laid out as the YAML is, with the records' defaults
+# and rules; ``_check`` checks them, then they become records. (Drake's ``MultibodyPlantConfig`` and
+# ``schema.Transform`` do not fit: ``plant`` holds the station's knobs beside the plant config's fields,
+# and poses are ``{xyz, rpy_deg}``, not ``{translation, rotation}``.)
+def _like(record: type, name: str):
+    """A schema field with the default and rule of ``record``'s field ``name``."""
+    f = record.__dataclass_fields__[name]
+    return field(default=f.default, metadata=f.metadata)
+
+
+def _twin(record: type) -> type:
+    """The schema of a record the YAML spells out field by field (its tuples as lists)."""
+    return dataclasses.make_dataclass(f"_{record.__name__}Yaml", [
+        (f.name, list[float] if typing.get_origin(f.type) is tuple else f.type, _like(record, f.name))
+        for f in fields(record)])
+
+
+_PoseYaml, _PrimitiveYaml, _ObjectCloudYaml, _PlantYaml = map(_twin, (Pose, PrimitiveObject, ObjectCloudSpec,
+                                                                      PlantSpec))
+
+
+@dataclass
+class _ObjectYaml:
+    category: str | None = None  # None: ObjectSpec.category (for a data-set instance)
+    instance: str | None = None  # None: "<category>_00"
+    primitive: _PrimitiveYaml | None = None
+    xyz: list[float] = ObjectSpec.xyz
+    yaw_deg: float = ObjectSpec.yaw_deg
+    model_dir: str | None = None
+
+
+@dataclass
+class _TableYaml:
+    xyz: list[float] = TableSpec.pose.xyz
+    rpy_deg: list[float] = TableSpec.pose.rpy_deg
+    size: list[float] = _like(TableSpec, "size")
+    friction: float = _like(TableSpec, "friction")
+    hydroelastic_modulus: float = _like(TableSpec, "hydroelastic_modulus")
+
+
+@dataclass
+class _LookAtYaml:
+    eye: list[float] = CameraSpec.look_at_eye
+    target: list[float] = CameraSpec.look_at_target
+
+
+@dataclass
+class _CameraYaml:
+    name: str = _like(CameraSpec, "name")
+    X_WC: _PoseYaml | None = None
+    look_at: _LookAtYaml | None = None  # None (and no X_WC): CameraSpec's look-at default
+    width: int = _like(CameraSpec, "width")
+    height: int = _like(CameraSpec, "height")
+    fov_y_deg: float = _like(CameraSpec, "fov_y_deg")
+    depth_range: list[float] = _like(CameraSpec, "depth_range")
+
+
+@dataclass
+class _ScenarioYaml:
+    object: _ObjectYaml = field(default_factory=_ObjectYaml)
+    arm_base: _PoseYaml = field(default_factory=_PoseYaml)
+    arm_q_home: list[float] = DEFAULT_ARM_Q_HOME
+    table: _TableYaml = field(default_factory=_TableYaml)
+    cameras: list[_CameraYaml] | None = None  # None: Scenario.cameras
+    object_cloud: _ObjectCloudYaml = field(default_factory=_ObjectCloudYaml)
+    plant: _PlantYaml = field(default_factory=_PlantYaml)
+    meshcat: bool = False
+
+
+# ----------------------------------------------------------------------------- loading
+#: What Drake's loader raises on bad data: its own RuntimeError, or (from inside it) a failed str -> number
+#: conversion, a scalar where a list or mapping belongs, or data PyYAML cannot write back.
+_LOADER_ERRORS = (RuntimeError, ValueError, TypeError, AttributeError, AssertionError, OverflowError, yaml.YAMLError)
+
+
+def _one_line(e: Exception) -> str:
+    return " ".join(str(e).split()) or type(e).__name__
+
+
+def _load(schema: type, data: dict, where: str):
+    """``data`` (plain YAML data) loaded by ``yaml_load_typed`` into ``schema``'s defaults."""
     try:
-        a = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        raise InputError(f"{where}: expected {n} numbers, got {value!r}") from None
-    if a.shape != (n,) or not np.all(np.isfinite(a)):
-        raise InputError(f"{where}: expected {n} finite numbers, got {value!r}")
-    return tuple(float(v) for v in a)
+        return yaml_load_typed(schema=schema, data=yaml.safe_dump(data))
+    except _LOADER_ERRORS as e:
+        raise InputError(_blame(schema, data, where) or f"{where}: {_one_line(e)}") from None
 
 
-def _num(value, where: str, *, positive: bool = False, nonneg: bool = False) -> float:
-    if isinstance(value, bool):
-        raise InputError(f"{where}: expected a number, got {value!r}")
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise InputError(f"{where}: expected a number, got {value!r}") from None
-    if not math.isfinite(v) or (positive and v <= 0) or (nonneg and v < 0):
-        kind = "positive " if positive else "non-negative " if nonneg else "finite "
-        raise InputError(f"{where}: expected a {kind}number, got {value!r}")
-    return v
+def _blame(schema: type, data: Any, where: str) -> str | None:
+    """The one-line error of the deepest field of ``data`` that Drake's loader rejects (its own messages
+    name the leaf field at most): each field is loaded alone, and a failing mapping searched further."""
+    if not isinstance(data, dict):
+        return f"{where}: expected a mapping, got {type(data).__name__}"
+    types = {f.name: f.type for f in fields(schema)}
+    for key, value in data.items():
+        w = f"{where}.{key}"
+        if key not in types:
+            return f"{where}: unknown field {key!r}; known: {', '.join(types)}"
+        try:
+            yaml_load_typed(schema=schema, data=yaml.safe_dump({key: value}))
+        except _LOADER_ERRORS as e:
+            args = typing.get_args(types[key])
+            kind = args[0] if type(None) in args else types[key]  # X of X | None
+            item = typing.get_args(kind)[0] if typing.get_origin(kind) is list else None
+            if is_dataclass(kind):
+                return _blame(kind, value, w)
+            if item is not None and not isinstance(value, list):
+                return f"{w}: expected a list, got {type(value).__name__}"
+            blamed = (_blame(item, v, f"{w}[{i}]") for i, v in enumerate(value)) if is_dataclass(item) else ()
+            return next(filter(None, blamed), f"{w}: {_one_line(e)}")
+    return None
 
 
-def _mapping(value, where: str, allowed: set[str]) -> dict:
-    if value is None:
-        return {}
-    if not isinstance(value, dict):
-        raise InputError(f"{where}: expected a mapping, got {type(value).__name__}")
-    unknown = sorted(set(value) - allowed)
-    if unknown:
-        raise InputError(f"{where}: unknown field(s) {', '.join(map(repr, unknown))}; "
-                         f"known: {', '.join(sorted(allowed))}")
-    return value
+def _check(obj, where: str) -> None:
+    """A loaded schema object's checks, recursively: every number finite, a vector exactly as long as its
+    default, each field's rule; InputError naming the first field that fails."""
+    for f in fields(obj):
+        value, w = getattr(obj, f.name), f"{where}.{f.name}"
+        if is_dataclass(value):
+            _check(value, w)
+        elif isinstance(value, list) and value and is_dataclass(value[0]):
+            for i, item in enumerate(value):
+                _check(item, f"{w}[{i}]")
+        elif value is not None:
+            n = len(f.default) if isinstance(f.default, tuple) else None
+            if n is not None and len(value) != n:
+                raise InputError(f"{w}: expected {n} numbers, got {value!r}")
+            if any(isinstance(x, float) and not math.isfinite(x) for x in (value if n else [value])):
+                raise InputError(f"{w}: expected {'finite numbers' if n else 'a finite number'}, got {value!r}")
+            ok, expected = f.metadata.get("rule", (None, ""))
+            if ok is not None and not ok(value):
+                raise InputError(f"{w}: expected {expected}, got {value!r}")
 
 
-def _pose(value, where: str, default: Pose = Pose()) -> Pose:
-    d = _mapping(value, where, {"xyz", "rpy_deg"})
-    return Pose(_vec(d.get("xyz", default.xyz), 3, f"{where}.xyz"),
-                _vec(d.get("rpy_deg", default.rpy_deg), 3, f"{where}.rpy_deg"))
+def _frozen(record: type, obj):
+    """The ``record`` with the fields of the schema object ``obj`` (lists as tuples)."""
+    values = {f.name: getattr(obj, f.name) for f in fields(obj)}
+    return record(**{k: tuple(v) if isinstance(v, list) else v for k, v in values.items()})
 
 
-def _primitive(value, where: str) -> PrimitiveObject:
-    d = _mapping(value, where, {f.name for f in dataclasses.fields(PrimitiveObject)})
-    p = PrimitiveObject()
-    shape = d.get("shape", p.shape)
-    if shape not in ("cylinder", "box"):
-        raise InputError(f"{where}.shape: expected 'cylinder' or 'box', got {shape!r}")
-    return PrimitiveObject(
-        shape=shape,
-        radius=_num(d.get("radius", p.radius), f"{where}.radius", positive=True),
-        length=_num(d.get("length", p.length), f"{where}.length", positive=True),
-        size=_vec(d.get("size", p.size), 3, f"{where}.size"),
-        mass_kg=_num(d.get("mass_kg", p.mass_kg), f"{where}.mass_kg", positive=True),
-        friction=_num(d.get("friction", p.friction), f"{where}.friction", positive=True),
-    )
-
-
-def _object(value, where: str) -> ObjectSpec:
-    d = _mapping(value, where, {"category", "instance", "primitive", "xyz", "yaw_deg", "model_dir"})
-    xyz = _vec(d.get("xyz", (0.0, 0.0, 0.0)), 3, f"{where}.xyz")
-    yaw = _num(d.get("yaw_deg", 0.0), f"{where}.yaw_deg")
-    if "primitive" in d:
-        if "category" in d or "instance" in d:
+def _object(o: _ObjectYaml, where: str) -> ObjectSpec:
+    placement = {"xyz": tuple(o.xyz), "yaw_deg": o.yaw_deg}
+    if o.primitive is not None:
+        if o.category is not None or o.instance is not None:
             raise InputError(f"{where}: give either primitive or category + instance, not both")
-        return ObjectSpec(None, None, _primitive(d["primitive"], f"{where}.primitive"), xyz, yaw)
-    category = d.get("category", ObjectSpec.category)
-    instance = d.get("instance", f"{category}_00")
+        return ObjectSpec(None, None, _frozen(PrimitiveObject, o.primitive), **placement)
+    category = ObjectSpec.category if o.category is None else o.category
+    instance = f"{category}_00" if o.instance is None else o.instance
     if category not in CATEGORIES:
         raise InputError(f"{where}.category: unknown category {category!r}; known: {', '.join(CATEGORIES)}")
-    if "model_dir" in d:
-        model_dir = str(d["model_dir"])
-        if not (Path(model_dir) / f"{instance}.sdf").is_file():
-            raise InputError(f"{where}.model_dir: no {instance}.sdf in {model_dir}")
-        return ObjectSpec(category, instance, None, xyz, yaw, model_dir)
-    if instance not in list_instances(category):
+    if o.model_dir is not None:
+        if not (Path(o.model_dir) / f"{instance}.sdf").is_file():
+            raise InputError(f"{where}.model_dir: no {instance}.sdf in {o.model_dir}")
+    elif instance not in list_instances(category):
         raise InputError(f"{where}.instance: unknown instance {instance!r} of {category!r}")
-    return ObjectSpec(category, instance, None, xyz, yaw)
+    return ObjectSpec(category, instance, None, model_dir=o.model_dir, **placement)
 
 
-def _camera(value, where: str) -> CameraSpec:
-    d = _mapping(value, where, {"name", "X_WC", "look_at", "width", "height", "fov_y_deg", "depth_range"})
-    c = CameraSpec()
-    X_WC, eye, target = None, c.look_at_eye, c.look_at_target
-    if "X_WC" in d and "look_at" in d:
+def _camera(c: _CameraYaml, where: str) -> CameraSpec:
+    if c.X_WC is not None and c.look_at is not None:
         raise InputError(f"{where}: give either X_WC or look_at, not both")
-    if "X_WC" in d:
-        X_WC, eye, target = _pose(d["X_WC"], f"{where}.X_WC"), None, None
-    elif "look_at" in d:
-        la = _mapping(d["look_at"], f"{where}.look_at", {"eye", "target"})
-        eye = _vec(la.get("eye", eye), 3, f"{where}.look_at.eye")
-        target = _vec(la.get("target", target), 3, f"{where}.look_at.target")
+    if c.X_WC is not None:
+        X_WC, eye, target = _frozen(Pose, c.X_WC), None, None
+    else:
+        look_at = c.look_at or _LookAtYaml()
+        X_WC, eye, target = None, tuple(look_at.eye), tuple(look_at.target)
         if np.allclose(eye, target):
             raise InputError(f"{where}.look_at: eye and target coincide")
-    depth_range = _vec(d.get("depth_range", c.depth_range), 2, f"{where}.depth_range")
-    if not 0 < depth_range[0] < depth_range[1]:
-        raise InputError(f"{where}.depth_range: expected 0 < near < far, got {list(depth_range)}")
-    fov = _num(d.get("fov_y_deg", c.fov_y_deg), f"{where}.fov_y_deg", positive=True)
-    if fov >= 180:
-        raise InputError(f"{where}.fov_y_deg: expected < 180, got {fov}")
-    width, height = d.get("width", c.width), d.get("height", c.height)
-    for k, v in (("width", width), ("height", height)):
-        if not isinstance(v, int) or isinstance(v, bool) or v <= 0:
-            raise InputError(f"{where}.{k}: expected a positive integer, got {v!r}")
-    name = d.get("name", c.name)
-    if not isinstance(name, str) or not name.isidentifier():
-        raise InputError(f"{where}.name: expected an identifier-like name, got {name!r}")
-    return CameraSpec(name, X_WC, eye, target, width, height, fov, depth_range)
+    return CameraSpec(c.name, X_WC, eye, target, c.width, c.height, c.fov_y_deg, tuple(c.depth_range))
 
 
-def _object_cloud(value, where: str) -> ObjectCloudSpec:
-    d = _mapping(value, where, {f.name for f in dataclasses.fields(ObjectCloudSpec)})
-    c = ObjectCloudSpec()
-    lo = _vec(d.get("crop_min", c.crop_min), 3, f"{where}.crop_min")
-    hi = _vec(d.get("crop_max", c.crop_max), 3, f"{where}.crop_max")
-    if not all(a < b for a, b in zip(lo, hi)):
-        raise InputError(f"{where}: crop_min must be below crop_max in every axis")
-    seed = d.get("seed", c.seed)
-    if not isinstance(seed, int) or isinstance(seed, bool) or seed < 0:
-        raise InputError(f"{where}.seed: expected a non-negative integer, got {seed!r}")
-    model = d.get("depth_noise_model", c.depth_noise_model)
-    if model not in ("gaussian", "kinect"):
-        raise InputError(f"{where}.depth_noise_model: expected 'gaussian' or 'kinect', got {model!r}")
-    dropout = _num(d.get("edge_dropout", c.edge_dropout), f"{where}.edge_dropout", nonneg=True)
-    if dropout > 1.0:
-        raise InputError(f"{where}.edge_dropout: a probability in [0, 1], got {dropout:g}")
-    return ObjectCloudSpec(
-        voxel_size=_num(d.get("voxel_size", c.voxel_size), f"{where}.voxel_size", nonneg=True),
-        crop_min=lo, crop_max=hi,
-        depth_noise_std=_num(d.get("depth_noise_std", c.depth_noise_std), f"{where}.depth_noise_std", nonneg=True),
-        seed=seed, depth_noise_model=model, edge_dropout=dropout,
-    )
-
-
-_APPROXIMATIONS = ("sap", "tamsi", "similar", "lagged", "")
-_CONTACT_MODELS = ("hydroelastic_with_fallback", "hydroelastic", "point")
-
-
-def _plant(value, where: str) -> PlantSpec:
-    d = _mapping(value, where, {f.name for f in dataclasses.fields(PlantSpec)})
-    p = PlantSpec()
-    approx = d.get("discrete_contact_approximation", p.discrete_contact_approximation)
-    if approx not in _APPROXIMATIONS:
-        raise InputError(f"{where}.discrete_contact_approximation: expected one of {_APPROXIMATIONS}, got {approx!r}")
-    model = d.get("contact_model", p.contact_model)
-    if model not in _CONTACT_MODELS:
-        raise InputError(f"{where}.contact_model: expected one of {_CONTACT_MODELS}, got {model!r}")
-    return PlantSpec(
-        time_step=_num(d.get("time_step", p.time_step), f"{where}.time_step", positive=True),
-        discrete_contact_approximation=approx,
-        contact_model=model,
-        penetration_allowance=_num(d.get("penetration_allowance", p.penetration_allowance),
-                                   f"{where}.penetration_allowance", positive=True),
-        hand_effort_scale=_num(d.get("hand_effort_scale", p.hand_effort_scale), f"{where}.hand_effort_scale",
-                               positive=True),
-        object_friction=None if d.get("object_friction") is None else _num(
-            d["object_friction"], f"{where}.object_friction", positive=True),
-        hand_resolution_hint=None if d.get("hand_resolution_hint") is None else _num(
-            d["hand_resolution_hint"], f"{where}.hand_resolution_hint", positive=True),
-        object_mass_scale=_num(d.get("object_mass_scale", p.object_mass_scale), f"{where}.object_mass_scale",
-                               positive=True),
-    )
-
-
-def _table(value, where: str) -> TableSpec:
-    d = _mapping(value, where, {"xyz", "rpy_deg", "size", "friction", "hydroelastic_modulus"})
-    t = TableSpec()
-    pose = _pose({k: d[k] for k in ("xyz", "rpy_deg") if k in d}, where, t.pose)
-    size = _vec(d.get("size", t.size), 3, f"{where}.size")
-    if min(size) <= 0:
-        raise InputError(f"{where}.size: expected positive extents, got {list(size)}")
-    return TableSpec(pose, size,
-                     _num(d.get("friction", t.friction), f"{where}.friction", positive=True),
-                     _num(d.get("hydroelastic_modulus", t.hydroelastic_modulus),
-                          f"{where}.hydroelastic_modulus", positive=True))
-
-
-_SCENARIO_FIELDS = {"object", "arm_base", "arm_q_home", "table", "cameras", "object_cloud", "plant", "meshcat"}
+def _scenario(name: str, data: Any, where: str) -> Scenario:
+    data = {} if data is None else data
+    if not isinstance(data, dict):
+        raise InputError(f"{where}: expected a mapping, got {type(data).__name__}")
+    s = _load(_ScenarioYaml, {k: v for k, v in data.items() if v is not None}, where)  # null: the default
+    _check(s, where)
+    cameras = Scenario.cameras if s.cameras is None else tuple(
+        _camera(c, f"{where}.cameras[{i}]") for i, c in enumerate(s.cameras))
+    names = [c.name for c in cameras]
+    if len(set(names)) != len(names):
+        raise InputError(f"{where}.cameras: duplicate camera names {names}")
+    cloud, t = s.object_cloud, s.table
+    if not all(a < b for a, b in zip(cloud.crop_min, cloud.crop_max)):
+        raise InputError(f"{where}.object_cloud: crop_min must be below crop_max in every axis")
+    return Scenario(
+        name=name, object=_object(s.object, f"{where}.object"), arm_base=_frozen(Pose, s.arm_base),
+        arm_q_home=tuple(s.arm_q_home),
+        table=TableSpec(Pose(tuple(t.xyz), tuple(t.rpy_deg)), tuple(t.size), t.friction, t.hydroelastic_modulus),
+        cameras=cameras, object_cloud=_frozen(ObjectCloudSpec, cloud), plant=_frozen(PlantSpec, s.plant),
+        meshcat=s.meshcat)
 
 
 def scenario_from_dict(name: str, data: Any) -> Scenario:
     """Build a ``Scenario`` from one YAML entry (a mapping); raise InputError naming bad fields."""
-    where = f"scenario {name!r}"
-    d = _mapping(data, where, _SCENARIO_FIELDS)
-    cams = d.get("cameras", None)
-    if cams is None:
-        cameras = Scenario.cameras
-    else:
-        if not isinstance(cams, list):
-            raise InputError(f"{where}.cameras: expected a list of cameras")
-        cameras = tuple(_camera(c, f"{where}.cameras[{i}]") for i, c in enumerate(cams))
-        names = [c.name for c in cameras]
-        if len(set(names)) != len(names):
-            raise InputError(f"{where}.cameras: duplicate camera names {names}")
-    meshcat = d.get("meshcat", False)
-    if not isinstance(meshcat, bool):
-        raise InputError(f"{where}.meshcat: expected true/false, got {meshcat!r}")
-    return Scenario(
-        name=name,
-        object=_object(d.get("object"), f"{where}.object"),
-        arm_base=_pose(d.get("arm_base"), f"{where}.arm_base"),
-        arm_q_home=_vec(d.get("arm_q_home", DEFAULT_ARM_Q_HOME), 6, f"{where}.arm_q_home"),
-        table=_table(d.get("table"), f"{where}.table"),
-        cameras=cameras,
-        object_cloud=_object_cloud(d.get("object_cloud"), f"{where}.object_cloud"),
-        plant=_plant(d.get("plant"), f"{where}.plant"),
-        meshcat=meshcat,
-    )
+    return _scenario(name, data, f"scenario {name!r}")
+
+
+def _read(path: Path) -> dict:
+    """The mapping ``name -> entry`` of a scenario file."""
+    try:
+        data = yaml.safe_load(path.read_text())
+    except OSError as e:
+        raise ModelFileError(f"{path}: cannot read scenario file ({e})") from None
+    except yaml.YAMLError as e:
+        raise InputError(f"{path}: not valid YAML ({_one_line(e)})") from None
+    if not isinstance(data, dict) or not data:
+        raise InputError(f"{path}: expected a mapping of scenario names to scenarios")
+    return data
 
 
 def load_scenarios(path: str | Path = DEFAULT_SCENARIO_FILE) -> dict[str, Scenario]:
     """All named scenarios of a YAML file (``name -> Scenario``), in file order."""
     path = Path(path)
-    try:
-        data = yaml.safe_load(path.read_text())
-    except OSError as e:
-        raise ModelFileError(f"{path}: cannot read scenario file ({e})") from None
-    except yaml.YAMLError as e:
-        raise InputError(f"{path}: not valid YAML ({e})") from None
-    if not isinstance(data, dict) or not data:
-        raise InputError(f"{path}: expected a mapping of scenario names to scenarios")
-    return {str(name): scenario_from_dict(str(name), entry) for name, entry in data.items()}
+    return {str(k): _scenario(str(k), v, f"{path.name}: scenario {str(k)!r}") for k, v in _read(path).items()}
 
 
 def load_scenario(name: str, path: str | Path = DEFAULT_SCENARIO_FILE) -> Scenario:
     """One named scenario; InputError naming it (and the known names) when absent."""
     path = Path(path)
-    try:
-        data = yaml.safe_load(path.read_text())
-    except OSError as e:
-        raise ModelFileError(f"{path}: cannot read scenario file ({e})") from None
-    except yaml.YAMLError as e:
-        raise InputError(f"{path}: not valid YAML ({e})") from None
-    if not isinstance(data, dict) or name not in data:
-        known = ", ".join(map(str, data)) if isinstance(data, dict) else "none"
-        raise InputError(f"unknown scenario {name!r} in {path.name}; known: {known}")
-    return scenario_from_dict(name, data[name])
+    data = _read(path)
+    if name not in data:
+        raise InputError(f"unknown scenario {name!r} in {path.name}; known: {', '.join(map(str, data))}")
+    return _scenario(name, data[name], f"{path.name}: scenario {name!r}")
 
 
 def with_instance(scenario: Scenario, instance: str, category: str | None = None,

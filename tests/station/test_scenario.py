@@ -2,8 +2,14 @@
 
 from __future__ import annotations
 
+import copy
+import dataclasses
+
 import numpy as np
 import pytest
+import yaml
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from catgrasp_drake.core.visibility import look_at_matrix
 from catgrasp_drake.errors import InputError
@@ -87,3 +93,131 @@ def test_invalid_yaml_file(tmp_path):
 def test_default_file_location():
     assert DEFAULT_SCENARIO_FILE.name == "station.scenarios.yaml"
     assert DEFAULT_SCENARIO_FILE.is_file()
+
+
+# ----------------------------------------------------------------------------- Drake's loader, one-line errors
+@pytest.mark.parametrize("entry, where", [
+    ({"object": {"category": "drill", "colour": 1}}, "'x'.object: unknown field 'colour'"),
+    ({"objekt": {}}, "'x': unknown field 'objekt'"),
+    ({"cameras": [{}, {"look_at": {"eye": [1, 0, 0], "tagret": [0, 0, 0]}}]}, "'x'.cameras[1].look_at: unknown field"),
+    ({"plant": {"time_step": "fast"}}, "'x'.plant.time_step:"),
+    ({"cameras": [{"width": 1.5}]}, "'x'.cameras[0].width:"),
+    ({"cameras": [{"name": 7}]}, "'x'.cameras[0].name:"),
+    ({"meshcat": 1}, "'x'.meshcat:"),
+    ({"object": 5}, "'x'.object: expected a mapping, got int"),
+    ({"cameras": [5]}, "'x'.cameras[0]: expected a mapping, got int"),
+    ({"cameras": 5}, "'x'.cameras: expected a list, got int"),
+    ({"object": {"xyz": "abc"}}, "'x'.object.xyz: expected a list, got str"),
+    ({"object": {"xyz": [0, 0, float("nan")]}}, "'x'.object.xyz: expected finite numbers"),
+    ({"table": {"xyz": [0, 0, 0, 1]}}, "'x'.table.xyz: expected 3 numbers"),
+    ({"object": {"primitive": {"radius": 0}}}, "'x'.object.primitive.radius: expected a positive number"),
+    ({"plant": {"object_friction": float("inf")}}, "'x'.plant.object_friction: expected a finite number"),
+    ({"object_cloud": {"edge_dropout": 1.5}}, "'x'.object_cloud.edge_dropout: expected a probability"),
+    ([1, 2], "'x': expected a mapping, got list"),
+])
+def test_loader_errors_are_one_line_and_name_the_field(entry, where):
+    from tests.reliability.harness import check_message
+
+    with pytest.raises(InputError) as e:
+        scenario_from_dict("x", entry)
+    check_message(e.value)
+    assert where in str(e.value)
+
+
+def test_file_errors_name_the_file_and_are_one_line(tmp_path):
+    from tests.reliability.harness import check_message
+
+    p = tmp_path / "mine.scenarios.yaml"
+    p.write_text("ok: {}\nbad:\n  plant: {time_step: 0.001, contact_modle: point}\n")
+    for call in (lambda: load_scenarios(p), lambda: load_scenario("bad", p)):
+        with pytest.raises(InputError, match=r"^mine\.scenarios\.yaml: scenario 'bad'\.plant: unknown field "
+                                             r"'contact_modle'") as e:
+            call()
+        check_message(e.value)
+    assert load_scenario("ok", p) == Scenario(name="ok")
+    with pytest.raises(InputError, match="unknown scenario 'nope' in mine.scenarios.yaml; known: ok, bad"):
+        load_scenario("nope", p)
+    p.write_text("a: [1, 2\n")
+    with pytest.raises(InputError) as e:
+        load_scenarios(p)
+    check_message(e.value)
+    assert str(p) in str(e.value)
+    from catgrasp_drake.errors import ModelFileError
+    with pytest.raises(ModelFileError, match="cannot read scenario file"):
+        load_scenario("ok", tmp_path / "missing.yaml")
+
+
+def test_yaml_entry_types_and_defaults_as_the_records():
+    """What Drake's loader fills reaches the frozen records as tuples of floats; null and absent take defaults."""
+    s = scenario_from_dict("x", {"object": {"xyz": [1, 2, 3], "yaw_deg": 5}, "arm_q_home": [0, 1, 2, 3, 4, 5],
+                                 "plant": None, "table": {"size": [1, 1, 1]}, "cameras": None})
+    assert s.object.xyz == (1.0, 2.0, 3.0) and all(type(v) is float for v in s.object.xyz)
+    assert type(s.object.yaw_deg) is float and isinstance(s.arm_q_home, tuple)
+    assert s.table.size == (1.0, 1.0, 1.0) and s.table.pose == Scenario().table.pose
+    assert s.plant == Scenario().plant and s.cameras == Scenario().cameras
+    assert scenario_from_dict("unnamed", None) == scenario_from_dict("unnamed", {}) == Scenario()
+    assert hash(s) == hash(scenario_from_dict("x", {"object": {"xyz": [1.0, 2.0, 3.0], "yaw_deg": 5.0},
+                                                    "arm_q_home": [0, 1, 2, 3, 4, 5], "table": {"size": [1] * 3}}))
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        s.object.xyz = (0.0, 0.0, 0.0)
+    cam = scenario_from_dict("x", {"cameras": [{"name": "top", "X_WC": {"xyz": [0, 0, 1]}}]}).cameras[0]
+    assert (cam.X_WC.xyz, cam.look_at_eye, cam.look_at_target) == ((0.0, 0.0, 1.0), None, None)
+    prim = scenario_from_dict("x", {"object": {"primitive": {"shape": "box"}}}).object
+    assert (prim.category, prim.instance, prim.primitive.size) == (None, None, (0.05, 0.05, 0.15))
+    assert scenario_from_dict("x", {"object": {"category": "mug"}}).object.instance == "mug_00"
+
+
+# ----------------------------------------------------------------------------- fuzz
+_JUNK = st.one_of(st.none(), st.booleans(), st.integers(-10**6, 10**6), st.floats(allow_nan=True),
+                  st.text(max_size=8), st.lists(st.floats(-5, 5), max_size=7),
+                  st.dictionaries(st.text(max_size=6), st.integers(), max_size=3))
+
+
+def _paths(d, prefix=()):
+    """Every (path, value) in a nested YAML entry (mappings and lists)."""
+    items = d.items() if isinstance(d, dict) else enumerate(d) if isinstance(d, list) else ()
+    for k, v in items:
+        yield prefix + (k,), v
+        yield from _paths(v, prefix + (k,))
+
+
+@st.composite
+def _mutated_entries(draw):
+    """A named scenario's raw YAML entry with one field replaced, removed or added."""
+    raw = yaml.safe_load(DEFAULT_SCENARIO_FILE.read_text())
+    entry = copy.deepcopy(raw[draw(st.sampled_from(sorted(raw)))])
+    path, _ = draw(st.sampled_from(list(_paths(entry))))
+    parent = entry
+    for k in path[:-1]:
+        parent = parent[k]
+    how = draw(st.sampled_from(["replace", "replace", "remove", "add"]))
+    if how == "replace":
+        parent[path[-1]] = draw(_JUNK)
+    elif how == "remove":
+        del parent[path[-1]]
+    elif isinstance(parent, dict):
+        parent[draw(st.text(min_size=1, max_size=8))] = draw(_JUNK)
+    return entry
+
+
+@settings(max_examples=60, deadline=None, derandomize=True, database=None)
+@given(_mutated_entries())
+def test_fuzz_mutated_entries_load_or_fail_in_one_line(entry):
+    from tests.reliability.harness import attempt
+
+    def check(s):
+        assert isinstance(s, Scenario)
+        hash(s)
+        assert s == scenario_from_dict("fuzz", entry)
+
+    attempt("scenario_from_dict", "mutated", scenario_from_dict, "fuzz", entry, check=check, words=("scenario",))
+
+
+@settings(max_examples=40, deadline=None, derandomize=True, database=None)
+@given(st.text(max_size=80))
+def test_fuzz_scenario_file_text(tmp_path_factory, text):
+    from tests.reliability.harness import attempt
+
+    p = tmp_path_factory.mktemp("fuzz") / "s.yaml"
+    p.write_text(text)
+    attempt("load_scenarios", "text", load_scenarios, p)
