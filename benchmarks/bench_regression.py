@@ -12,7 +12,8 @@ family (``core.regression.REGRESSOR_GRID``): the NESTED leave-one-instance-out
 error -- each held-out instance predicted with the hyperparameters chosen by
 leave-one-instance-out on the other instances, so no choice saw it -- and
 the same for the automatic choice across all families (what a model file
-would use). Also the alpha the committed ridge uses, as trained.
+would use). Also the regressor the model file itself holds. A model trained with the grasp
+search (``catgrasp train --search``) is split on its instances' robustness-weighted mean grasps.
 """
 
 from __future__ import annotations
@@ -27,16 +28,13 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from catgrasp_drake.category_model import CategoryModel  # noqa: E402
-from catgrasp_drake.core.regression import REGRESSOR_GRID, leave_one_instance_out, nested_loo_error  # noqa: E402
-from catgrasp_drake.grasping.descriptor import motion_from_descriptor  # noqa: E402
+from catgrasp_drake.core.regression import REGRESSOR_GRID, instance_means, nested_loo_error  # noqa: E402
+from catgrasp_drake.grasping.descriptor import functional_point  # noqa: E402
 
 
 def functional_point_error(model: CategoryModel):
-    a = np.asarray(model.grasp_anchor_H)
-
     def centre(d):
-        P = motion_from_descriptor(d, model.template).pose("grasp")
-        return P[:3, :3] @ a + P[:3, 3]
+        return functional_point(d, model.template, model.grasp_anchor_H)
 
     def error(pred, rows):
         c = centre(pred)
@@ -51,21 +49,22 @@ def main(argv=None) -> int:
                     default=[f"models/trained/{c}.npz" for c in ("drill", "spray_bottle", "mug")])
     args = ap.parse_args(argv)
     names = tuple(REGRESSOR_GRID)
-    print("| model | instances | rows | " + " | ".join(names) + " | automatic choice | committed ridge |")
+    print("| model | instances | rows | " + " | ".join(names) + " | automatic choice | the model's regressor |")
     print("|---|---:|---:|" + "---:|" * (len(names) + 2))
     for path in args.models:
         model = CategoryModel.load(path)
         X, Y, g = model.training_latent, model.training_descriptors, np.asarray(model.training_groups)
+        if model.training_weights is not None:  # searched grasps: each instance's robustness-weighted mean
+            _, X, Y = instance_means(X, Y, g, model.training_weights)
+            g = np.arange(len(X))
         error = functional_point_error(model)
         t0 = time.perf_counter()
         family = {n: nested_loo_error(X, Y, g, error, (n,)) for n in names}
         auto = nested_loo_error(X, Y, g, error, names)
-        alpha = model.regressor.alpha
-        committed = leave_one_instance_out(
-            X, Y, g, lambda a, b, c: REGRESSOR_GRID["ridge"][0](a, b, c, alpha=alpha), error)
+        own = model.stats.get("regression", {"regressor": f"ridge (alpha {model.regressor.alpha:g})"})
         cells = " | ".join(f"{1000 * family[n]:.1f}" for n in names)
-        print(f"| {model.category} | {len(np.unique(g))} | {len(g)} | {cells} | {1000 * auto:.1f} | "
-              f"{1000 * committed:.1f} (alpha {alpha:g}) |", flush=True)
+        print(f"| {path} | {len(np.unique(g))} | {len(model.training_groups)} | {cells} | {1000 * auto:.1f} | "
+              f"{own['regressor']} {own.get('hyperparameters', '')} |", flush=True)
         print(f"  ({time.perf_counter() - t0:.1f} s)", file=sys.stderr)
     print("\nErrors in mm at the grasp's functional point, nested leave-one-instance-out (module docstring).")
     return 0

@@ -14,8 +14,10 @@ object, where the kernel field has died out, and a scale error would be
 multiplied by that lever arm.
 
 File format (one ``.npz``, atomic, checksummed, no pickle): the shape space's
-arrays under ``shape/``, the regressor under ``regressor/``, and a JSON header
-with the canonical motion (template), the parameters and the training
+arrays under ``shape/``, the regressor under ``regressor/`` (its kind -- ridge,
+kernel ridge or nearest instance, ``core.regression`` -- in the header; files
+without one hold a ridge), the training set under ``training/``, and a JSON
+header with the canonical motion (template), the parameters and the training
 statistics. Kind ``catgrasp.category_model``, version 1.
 """
 
@@ -28,7 +30,7 @@ import numpy as np
 
 from catgrasp_drake.core.deformation import warp_poses
 from catgrasp_drake.core.fileio import load_arrays, save_arrays
-from catgrasp_drake.core.regression import LinearRegressor, fit_ridge
+from catgrasp_drake.core.regression import Regressor, fit_ridge, regressor_from_arrays, regressor_to_arrays
 from catgrasp_drake.core.shape_space import ShapeSpace
 from catgrasp_drake.core.validation import positive, real_array, vector3
 from catgrasp_drake.errors import InputError, ModelFileError
@@ -72,7 +74,7 @@ class CategoryModel:
 
     category: str
     space: ShapeSpace
-    regressor: LinearRegressor
+    regressor: Regressor  # latent x (q,) -> canonical descriptor (D,)
     template: GraspMotion  # the canonical motion, canonical object frame
     instances: tuple[str, ...]  # training instances, in the shape space's order
     canonical_instance: str
@@ -85,17 +87,19 @@ class CategoryModel:
     #: (``core.deformation.local_rotations``); None: the field's Jacobian at the anchor (the paper).
     grasp_rotation_radius: float | None = None
     #: The regressor's training set (functional successes mapped to the canonical frame): latent
-    #: vectors (n, q), descriptors (n, D) and the index of each row's training instance (n,).
+    #: vectors (n, q), descriptors (n, D) and the index of each row's training instance (n,); optionally
+    #: each row's weight within its instance (n,), e.g. its robustness score (None: equal weights).
     training_latent: np.ndarray | None = field(default=None, repr=False)
     training_descriptors: np.ndarray | None = field(default=None, repr=False)
     training_groups: np.ndarray | None = field(default=None, repr=False)
+    training_weights: np.ndarray | None = field(default=None, repr=False)
 
     def __post_init__(self):
         if self.template.frame != "object":
             raise InputError("template motion must be in the object frame")
         D = descriptor_size(len(self.template.poses))
-        if self.regressor.coef.shape != (D, self.space.q):
-            raise InputError(f"regressor maps {self.regressor.coef.shape[1]} -> {self.regressor.coef.shape[0]}, "
+        if tuple(self.regressor.shape) != (self.space.q, D):
+            raise InputError(f"regressor maps {self.regressor.shape[0]} -> {self.regressor.shape[1]}, "
                              f"expected q={self.space.q} -> D={D}")
         if self.grasp_anchor_H is not None:
             a = np.asarray(self.grasp_anchor_H, float).reshape(-1)
@@ -116,13 +120,20 @@ class CategoryModel:
                     or not np.all(np.isfinite(L)) or not np.all(np.isfinite(Dd))):
                 raise InputError(f"training set: expected latent (n, {self.space.q}), descriptors (n, {D}) and "
                                  f"groups (n,) of finite numbers, got {L.shape}, {Dd.shape}, {g.shape}")
+            if self.training_weights is not None:
+                w = np.asarray(self.training_weights, float)
+                if w.shape != (n,) or not np.all(np.isfinite(w)) or np.any(w < 0):
+                    raise InputError(f"training set: expected {n} finite weights >= 0, got shape {w.shape}")
+        elif self.training_weights is not None:
+            raise InputError("training set: weights given without the training set")
 
     def refit(self, alpha: float) -> "CategoryModel":
         """The same model with the regressor re-fitted on its stored training set with ridge ``alpha``."""
 
         if self.training_descriptors is None:
             raise InputError("this model file holds no training set to re-fit (trained by an older version)")
-        reg = fit_ridge(self.training_latent, self.training_descriptors, alpha=alpha, groups=self.training_groups)
+        reg = fit_ridge(self.training_latent, self.training_descriptors, alpha=alpha, groups=self.training_groups,
+                        weights=self.training_weights)
         return replace(self, regressor=reg, params=self.params | {"ridge_alpha": float(alpha)})
 
     def instance_grasps(self, index: int) -> np.ndarray:
@@ -130,6 +141,17 @@ class CategoryModel:
         if self.training_descriptors is None:
             raise InputError("this model file holds no training set")
         return self.training_descriptors[np.asarray(self.training_groups) == int(index)]
+
+    def instance_descriptor(self, index: int) -> np.ndarray:
+        """Training instance ``index``'s grasp knowledge as one canonical descriptor: the mean of its rows,
+        weighted by ``training_weights`` when the model has them."""
+        rows = self.instance_grasps(index)
+        if not len(rows):
+            raise InputError(f"training instance {index} has no stored grasp")
+        if self.training_weights is None:
+            return rows.mean(axis=0)
+        w = np.asarray(self.training_weights, float)[np.asarray(self.training_groups) == int(index)]
+        return w @ rows / w.sum() if w.sum() > 0 else rows.mean(axis=0)
 
     def warp_options(self) -> dict:
         """Keyword arguments of ``warp_poses``/``inverse_warp_poses`` for this model's control poses."""
@@ -163,16 +185,19 @@ class CategoryModel:
     def save(self, path: str | os.PathLike) -> None:
         shape_arrays, shape_meta = self.space.to_arrays()
         arrays = {f"shape/{k}": v for k, v in shape_arrays.items()}
-        arrays["regressor/coef"] = self.regressor.coef
-        arrays["regressor/intercept"] = self.regressor.intercept
+        reg_arrays, reg_meta = regressor_to_arrays(self.regressor)
+        arrays |= {f"regressor/{k}": v for k, v in reg_arrays.items()}
         if self.training_descriptors is not None:
             arrays["training/latent"] = np.asarray(self.training_latent, float)
             arrays["training/descriptors"] = np.asarray(self.training_descriptors, float)
             arrays["training/groups"] = np.asarray(self.training_groups, np.int64)
+            if self.training_weights is not None:
+                arrays["training/weights"] = np.asarray(self.training_weights, float)
         meta = {
             "category": self.category,
             "shape": shape_meta,
-            "regressor_alpha": self.regressor.alpha,
+            "regressor": reg_meta,
+            "regressor_alpha": float(getattr(self.regressor, "alpha", 0.0)),
             "template": self.template.to_dict(),
             "instances": list(self.instances),
             "canonical_instance": self.canonical_instance,
@@ -196,13 +221,14 @@ class CategoryModel:
         try:
             space = ShapeSpace.from_arrays({k[6:]: v for k, v in arrays.items() if k.startswith("shape/")},
                                            meta["shape"], source=str(path))
-            coef = np.asarray(arrays["regressor/coef"], dtype=np.float64)
-            intercept = np.asarray(arrays["regressor/intercept"], dtype=np.float64)
-            alpha = float(meta["regressor_alpha"])
-            if (coef.ndim != 2 or intercept.shape != coef.shape[:1] or not np.all(np.isfinite(coef))
-                    or not np.all(np.isfinite(intercept)) or not (np.isfinite(alpha) and alpha >= 0)):
-                raise ModelFileError(f"{path}: the grasp regressor's arrays are inconsistent or not finite")
-            regressor = LinearRegressor(coef, intercept, alpha)
+            reg_meta = meta.get("regressor") or {"kind": "ridge", "alpha": meta["regressor_alpha"]}
+            try:
+                regressor = regressor_from_arrays(
+                    {k[len("regressor/"):]: v for k, v in arrays.items() if k.startswith("regressor/")}, reg_meta)
+            except InputError as e:
+                raise ModelFileError(f"{path}: the grasp regressor is unreadable ({e})") from None
+            if not getattr(regressor, "alpha", 0.0) >= 0:
+                raise ModelFileError(f"{path}: the grasp regressor's alpha is negative")
             model = cls(
                 category=str(meta["category"]),
                 space=space,
@@ -219,6 +245,7 @@ class CategoryModel:
                 training_latent=arrays.get("training/latent"),
                 training_descriptors=arrays.get("training/descriptors"),
                 training_groups=arrays.get("training/groups"),
+                training_weights=arrays.get("training/weights"),
             )
         except (KeyError, TypeError, ValueError, AttributeError) as e:
             raise ModelFileError(f"{path}: incomplete or inconsistent category model ({e})") from None

@@ -154,9 +154,21 @@ def _cmd_train(args) -> int:
         _check_instances(args.category, [args.canonical], "--canonical")
         if args.instances and args.canonical not in args.instances:
             raise InputError(f"--canonical: {args.canonical!r} is not among --instances")
+    search = None
+    if args.search:
+        from catgrasp_drake.grasping.robustness import Robustness
+        from catgrasp_drake.grasping.search import CemParams
+        from catgrasp_drake.training import InstanceSearch
+
+        if args.elite > args.population:
+            raise InputError(f"--elite: {args.elite} is more than --population {args.population}")
+        search = InstanceSearch(cem=CemParams(rounds=args.rounds, population=args.population, elite=args.elite),
+                                robustness=Robustness(perturbations=args.perturbations, seed=args.seed),
+                                keep=args.keep)
     config = TrainingConfig(samples_per_instance=args.samples, seed=args.seed, workers=args.workers,
                             canonical_instance=args.canonical, cache_dir=args.cache, ray=args.ray,
-                            sampling=SamplingParams())
+                            sampling=SamplingParams(), search=search,
+                            regressor=args.regressor or ("auto" if args.search else "ridge"))
     from catgrasp_drake.data.dataset import list_instances
 
     instances = args.instances
@@ -170,8 +182,9 @@ def _cmd_train(args) -> int:
             raise InputError(f"--canonical: {args.canonical!r} is held out; lower --hold-out or pick another")
         if args.hold_out:
             print(f"held out (never trained on; the demo's novel instances): {', '.join(names[len(instances):])}")
-    print(f"training {args.category} on {len(instances)} instances: {args.samples} sampled motions per instance, "
-          f"seed {args.seed}")
+    how = (f"a robustness search per instance ({args.rounds} rounds x {args.population} candidates x "
+           f"{args.perturbations} trials at most)" if args.search else f"{args.samples} sampled motions per instance")
+    print(f"training {args.category} on {len(instances)} instances: {how}, seed {args.seed}")
     model = train_category(args.category, instances, config, progress=_Progress())
     out = Path(args.out or f"models/trained/{args.category}.npz")
     model.save(out)
@@ -184,6 +197,10 @@ def _cmd_train(args) -> int:
     print(f"simulated trials: {st['trials_simulated']}, functional successes: {st['trials_functional']} "
           f"({100 * rate:.0f} %), instances with a functional success: "
           f"{st['instances_with_functional_success']}/{st['instances']}")
+    reg = st["regression"]
+    print(f"regressor: {reg['regressor']}" + (f" {reg['hyperparameters']}, leave-one-instance-out error at the "
+                                               f"functional point {reg['loo_error_mm']} mm (by family: "
+                                               f"{reg['loo_error_mm_by_family']})" if "loo_error_mm" in reg else ""))
     print(f"latent dimensions q = {st['q']}; time: shape space {st['shape_time_s']} s, trials "
           f"{st['trial_time_s']} s ({st['trials_per_s']} trials/s), total {st['total_time_s']} s")
     print(f"wrote {out}")
@@ -412,7 +429,8 @@ def _cmd_search_grasp(args) -> int:
     import yaml
 
     from catgrasp_drake.core.fileio import atomic_write_text
-    from catgrasp_drake.grasp_search import Robustness, apply_variation_to_spec, search_grasp
+    from catgrasp_drake.grasp_search import apply_variation_to_spec, search_grasp
+    from catgrasp_drake.grasping.robustness import Robustness
     from catgrasp_drake.grasping.search import CemParams
     from catgrasp_drake.robot.models import load_hand_postures
     from catgrasp_drake.station.handwritten import GRASPS_DIR
@@ -524,6 +542,17 @@ def build_parser() -> argparse.ArgumentParser:
     t.add_argument("--out", help="model file (default: models/trained/<category>.npz)")
     t.add_argument("--ray", default=None,
                    help="run trials on a Ray cluster: 'auto', 'local' or the head's address (extra .[cluster])")
+    t.add_argument("--search", action="store_true",
+                   help="search each instance's grasp for robustness (cross-entropy) instead of --samples random ones")
+    t.add_argument("--rounds", type=_int_at_least(1, 50), default=3, help="--search: rounds")
+    t.add_argument("--population", type=_int_at_least(2, 200), default=8, help="--search: candidates per round")
+    t.add_argument("--elite", type=_int_at_least(1, 200), default=2, help="--search: elite per round")
+    t.add_argument("--perturbations", type=_int_at_least(1, 50), default=2,
+                   help="--search: trials per candidate (the first nominal, the others perturbed)")
+    t.add_argument("--keep", type=_int_at_least(1, 50), default=3, help="--search: best grasps kept per instance")
+    t.add_argument("--regressor", choices=("ridge", "auto"), default=None,
+                   help="latent -> grasp regressor: ridge, or chosen by leave-one-instance-out "
+                        "(default: auto with --search, ridge without)")
     t.set_defaults(func=_cmd_train)
 
     e = sub.add_parser("evaluate", help="the paper's Table I: leave-two-out, full and single views, baselines")

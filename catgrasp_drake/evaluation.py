@@ -43,9 +43,9 @@ from catgrasp_drake.data.dataset import list_instances
 from catgrasp_drake.errors import InputError, ModelFileError, one_line
 from catgrasp_drake.runner import code_fingerprint, run_tasks
 from catgrasp_drake.station.scenario import load_scenario, random_placement, with_instance
-from catgrasp_drake.training import TRIAL_CODE_PATHS, TrainingConfig, train_category
+from catgrasp_drake.training import TrainingConfig, train_category
 from catgrasp_drake.transfer import VIEWS, observe
-from catgrasp_drake.trial import run_grasp_trial
+from catgrasp_drake.trial import TRIAL_CODE_PATHS, run_grasp_trial
 from catgrasp_drake.viz.charts import table_chart
 
 #: The views evaluated by default, in the paper's Table I order (full view first).

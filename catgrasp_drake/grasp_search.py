@@ -3,19 +3,9 @@
 A candidate is a grasp variation (``catgrasp_drake.station.variation``: the
 hand moved and turned about the functional region, the closed posture's
 finger groups changed) of the category's hand-written grasp. Its score is
-its *robustness*: the mean over trials on the search instances, each under a
-seeded perturbation --
-
-- the object's pose off what the grasp was planned for by up to
-  ``shift_m`` (uniform in a disc, m) and ``turn_deg`` (about the vertical
-  through the object's origin), so the grasp is executed on an object that
-  is not quite where it was expected;
-- the object's friction drawn from ``friction`` (uniform);
-- its mass times a factor drawn from ``mass_scale`` (uniform),
-
-of ``functional + grasp_weight * grasped`` (1 for a functional grasp,
-``grasp_weight`` for a grasp that holds but misses the function, 0 else).
-Perturbation 0 of every instance is the nominal one. Trials are tasks of
+its *robustness* (``catgrasp_drake.grasping.robustness``): the mean score of
+trials on the search instances, each under a seeded perturbation of the
+object's pose, friction and mass. Trials are tasks of
 :func:`catgrasp_drake.runner.run_tasks`: cached (an interrupted search
 resumes), on local workers or Ray. The search runs on the committed
 instances only -- they are what may be tuned on.
@@ -27,10 +17,8 @@ result is a reviewable diff of ``models/grasps/<category>_handwritten.yaml``.
 
 from __future__ import annotations
 
-import math
 import time
-import zlib
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -39,6 +27,7 @@ from scipy.spatial.transform import Rotation
 from catgrasp_drake.core.fileio import file_sha256
 from catgrasp_drake.errors import InputError
 from catgrasp_drake.grasping.constraints import load_constraint
+from catgrasp_drake.grasping.robustness import Robustness, perturbation, trial_score
 from catgrasp_drake.grasping.search import CemParams, cem_maximize
 from catgrasp_drake.robot.models import HAND_ACTUATED_JOINTS
 from catgrasp_drake.station.variation import VARIATION_NAMES, VARIATION_SCALE, variation_dict, varied_posture
@@ -46,69 +35,18 @@ from catgrasp_drake.station.variation import VARIATION_NAMES, VARIATION_SCALE, v
 TASK = "grasp_search_trial"
 
 
-@dataclass(frozen=True)
-class Robustness:
-    """How a candidate is scored (module docstring). SI units; angles in degrees."""
-
-    perturbations: int = 2  # per instance (the first is the nominal placement)
-    shift_m: float = 0.01
-    turn_deg: float = 5.0
-    friction: tuple[float, float] = (0.5, 1.0)
-    mass_scale: tuple[float, float] = (0.7, 1.3)
-    grasp_weight: float = 0.2
-    seed: int = 0
-
-    def __post_init__(self):
-        if not (isinstance(self.perturbations, int) and self.perturbations >= 1):
-            raise InputError(f"perturbations: expected a positive integer, got {self.perturbations!r}")
-        for name in ("friction", "mass_scale"):
-            lo, hi = getattr(self, name)
-            if not 0 < lo <= hi:
-                raise InputError(f"{name}: expected 0 < low <= high, got {(lo, hi)}")
-        if self.shift_m < 0 or self.turn_deg < 0 or not 0 <= self.grasp_weight <= 1:
-            raise InputError("shift_m, turn_deg >= 0 and grasp_weight in [0, 1] expected")
-
-
-def perturbation(robustness: Robustness, instance: str, k: int) -> dict:
-    """The ``k``-th perturbation of ``instance`` (k = 0: nominal): a JSON-able dict, seeded by (seed, instance, k)."""
-    if k == 0:
-        return {"dx": 0.0, "dy": 0.0, "dyaw_deg": 0.0, "friction": None, "mass_scale": 1.0}
-    rng = np.random.default_rng([robustness.seed, zlib.crc32(instance.encode()), k, 18])
-    r = robustness.shift_m * math.sqrt(rng.uniform())
-    a = rng.uniform(0, 2 * math.pi)
-    return {"dx": round(r * math.cos(a), 6), "dy": round(r * math.sin(a), 6),
-            "dyaw_deg": round(float(rng.uniform(-robustness.turn_deg, robustness.turn_deg)), 4),
-            "friction": round(float(rng.uniform(*robustness.friction)), 4),
-            "mass_scale": round(float(rng.uniform(*robustness.mass_scale)), 4)}
-
-
-def trial_score(outcome: dict, grasp_weight: float) -> float:
-    """1 for a functional grasp, ``grasp_weight`` for a held one, 0 else."""
-    return 1.0 if outcome.get("functional") else grasp_weight if outcome.get("grasp") else 0.0
-
-
 def search_trial_task(spec: dict) -> dict:
     """Worker task: the category's hand-written grasp with a variation, on one instance under one perturbation."""
     from catgrasp_drake.station.handwritten import load_handwritten_motion
     from catgrasp_drake.station.scenario import load_scenario, with_instance
     from catgrasp_drake.station.variation import vary_motion
-    from catgrasp_drake.trial import run_grasp_trial
+    from catgrasp_drake.trial import run_perturbed_trial
 
-    category, instance, p = spec["category"], spec["instance"], spec["perturbation"]
-    base = with_instance(load_scenario(f"{category}_default"), instance)
-    scenario = base.replace(plant=replace(base.plant, object_friction=p["friction"],
-                                          object_mass_scale=p["mass_scale"]))
+    category, instance = spec["category"], spec["instance"]
     motion = load_handwritten_motion(category, instance, spec.get("grasp_file"))
     motion = vary_motion(motion, category, instance, spec["variation"])
-    # the object is off the pose the grasp was made for by E (in O): the grasp, in O, moves by E^-1
-    E = np.eye(4)
-    E[:3, :3] = Rotation.from_euler("z", p["dyaw_deg"], degrees=True).as_matrix()
-    E[:3, 3] = (p["dx"], p["dy"], 0.0)
-    motion = replace(motion, poses=np.linalg.inv(E) @ motion.poses)
-    r = run_grasp_trial(scenario, motion)
-    return {"grasp": bool(r.grasp_success), "functional": bool(r.functional_success), "reason": r.failure_reason,
-            "tilt_deg": round(float(r.object_tilt_deg), 3), "trigger_force_N": r.trigger_force_N,
-            "sim_s": round(float(r.sim_time_s), 3), "wall_s": round(float(r.wall_time_s), 3)}
+    return run_perturbed_trial(with_instance(load_scenario(f"{category}_default"), instance), motion,
+                               spec["perturbation"])
 
 
 @dataclass
@@ -140,13 +78,15 @@ def search_grasp(category: str, instances, *, cem: CemParams = CemParams(), robu
     ``progress(round, candidates, scores)`` after each round.
     """
     from catgrasp_drake.runner import code_fingerprint, run_tasks
+    from catgrasp_drake.trial import TRIAL_CODE_PATHS
 
     instances = tuple(instances)
     if not instances:
         raise InputError("instances: the search needs at least one instance")
     std = VARIATION_SCALE if search_std is None else np.asarray(search_std, float)
     root = Path(__file__).resolve().parents[1]
-    version = code_fingerprint([root / "catgrasp_drake", root / "models"])
+    # what a search trial runs: the trial's code, this module's task and the grasp files it varies
+    version = code_fingerprint([*TRIAL_CODE_PATHS, Path(__file__), root / "models" / "grasps"])
     perturbations = [(i, perturbation(robustness, i, k)) for i in instances for k in range(robustness.perturbations)]
     # a grasp file outside models/ is not in the code fingerprint: its content keys the trials
     start = {} if grasp_file is None else {"grasp_file": str(grasp_file), "grasp_sha256": file_sha256(grasp_file)}

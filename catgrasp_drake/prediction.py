@@ -135,7 +135,7 @@ def _predict_motion(method, model, x, X_WO, scale, observed_W, completed_W):
         poses[k] = G
         return _motion(poses, template), f"cpd: {r.iterations} iterations"
     k = nearest_instance(model, x)  # nearest
-    canonical = motion_from_descriptor(model.instance_grasps(k).mean(axis=0), template)
+    canonical = motion_from_descriptor(model.instance_descriptor(k), template)
     warped = warp_poses(model.space.canonical, model.space.decode(x), model.space.beta, canonical.poses,
                         **model.warp_options())
     return _motion(_placed(model, warped, X_WO, s), canonical), f"nearest training instance: {model.instances[k]}"

@@ -21,6 +21,20 @@
    inverse deformation (eq. 14; rotations re-orthonormalised), flatten to
    descriptors and fit the ridge regressor latent x -> descriptor, each
    instance weighted equally whatever its number of successes.
+
+With ``TrainingConfig.search`` (:class:`InstanceSearch`), step 3 is a
+per-instance grasp search instead of random samples: a cross-entropy search
+(``grasping.search.CemSearch``) over grasp variations
+(``station.variation``: the hand moved and turned about the warped
+functional point, the closed posture's finger groups changed) of the warped
+canonical motion, every candidate scored by its robustness
+(``grasping.robustness``: trials under seeded perturbations of the object's
+pose, friction and mass). All instances' searches run in lockstep, one batch
+of cached trials per round, on local workers or Ray. Each instance keeps its
+best ``keep`` candidates with at least one functional trial, weighted by
+their score; the regressor is then ``regressor`` -- ``"auto"`` chooses among
+mean, nearest instance, ridge and kernel ridge by leave-one-instance-out
+error at the functional point (``core.regression.select_regressor``).
 """
 
 from __future__ import annotations
@@ -28,40 +42,45 @@ from __future__ import annotations
 import dataclasses
 import time
 from dataclasses import asdict, dataclass
-from pathlib import Path
 from typing import Callable
 
 import numpy as np
 
 from catgrasp_drake.category_model import CategoryModel
 from catgrasp_drake.core.deformation import inverse_warp_poses, warp_poses
-from catgrasp_drake.core.regression import fit_ridge
+from catgrasp_drake.core.regression import REGRESSOR_GRID, fit_ridge, instance_means, select_regressor
 from catgrasp_drake.core.shape_space import build_shape_space
 from catgrasp_drake.data.dataset import instance_clouds, list_instances, load_annotations
 from catgrasp_drake.errors import InputError
 from catgrasp_drake.grasping.constraints import load_constraint
-from catgrasp_drake.grasping.descriptor import descriptor_vector
+from catgrasp_drake.grasping.descriptor import descriptor_vector, functional_point
 from catgrasp_drake.grasping.motion import GraspMotion
+from catgrasp_drake.grasping.robustness import Robustness, perturbation, trial_score
 from catgrasp_drake.grasping.sampling import SamplingParams, perturb_poses, perturbations
-from catgrasp_drake.runner import code_fingerprint, run_tasks
+from catgrasp_drake.grasping.search import CemParams, CemSearch
+from catgrasp_drake.runner import run_tasks
 from catgrasp_drake.station.handwritten import load_handwritten_motion
 from catgrasp_drake.station.scenario import load_scenario
-from catgrasp_drake.trial import run_grasp_trial
+from catgrasp_drake.station.variation import VARIATION_SCALE, variation_dict, vary_motion_about
+from catgrasp_drake.trial import run_grasp_trial, run_perturbed_trial, trial_code_version
 
-_ROOT = Path(__file__).resolve().parents[1]
-#: Files whose contents decide a trial's outcome: the trial cache is keyed by their hash.
-TRIAL_CODE_PATHS = (
-    _ROOT / "catgrasp_drake" / "station",
-    _ROOT / "catgrasp_drake" / "planning",
-    _ROOT / "catgrasp_drake" / "systems" / "grasp_execution.py",
-    _ROOT / "catgrasp_drake" / "trial.py",
-    _ROOT / "catgrasp_drake" / "robot",
-    _ROOT / "catgrasp_drake" / "grasping" / "motion.py",
-    _ROOT / "models" / "svh",
-    _ROOT / "models" / "ur10",
-    _ROOT / "models" / "station.scenarios.yaml",
-    _ROOT / "models" / "objects",
-)
+
+@dataclass(frozen=True)
+class InstanceSearch:
+    """Per-instance grasp search of training (module docstring). Trials per instance: at most
+    ``cem.rounds * cem.population * robustness.perturbations`` (candidates that break the functional
+    constraint, or whose plan is refused, cost no simulation)."""
+
+    cem: CemParams = CemParams(rounds=3, population=8, elite=2)
+    robustness: Robustness = Robustness(perturbations=2)
+    keep: int = 3  # best candidates kept per instance
+    spread: float = 1.0  # the search's initial spread, times station.variation.VARIATION_SCALE
+
+    def __post_init__(self):
+        if not (isinstance(self.keep, int) and self.keep >= 1):
+            raise InputError(f"keep: expected a positive integer, got {self.keep!r}")
+        if not self.spread > 0:
+            raise InputError(f"spread: expected > 0, got {self.spread!r}")
 
 
 @dataclass(frozen=True)
@@ -84,9 +103,15 @@ class TrainingConfig:
     # (benchmarks/bench_grasp_warp.py)
     ridge_alpha: float = 1.0
     grasp_rotation_radius: float = 0.05  # m; see CategoryModel.grasp_rotation_radius
+    search: InstanceSearch | None = None  # None: samples_per_instance random samples (the paper)
+    regressor: str = "ridge"  # "ridge" (with ridge_alpha) or "auto": chosen by leave-one-instance-out
     workers: int | None = None  # None: all cores
     cache_dir: str | None = "out/trial_cache"
     ray: str | None = None  # Ray address ("auto", "local", "host:port") or None: local worker processes
+
+    def __post_init__(self):
+        if self.regressor not in ("ridge", "auto"):
+            raise InputError(f"regressor: expected 'ridge' or 'auto', got {self.regressor!r}")
 
     def shape_kwargs(self) -> dict:
         kw = {"variance": self.variance}
@@ -107,8 +132,13 @@ def grasp_trial_task(spec: dict) -> dict:
     return result.to_dict()
 
 
-def trial_code_version() -> str:
-    return code_fingerprint(TRIAL_CODE_PATHS)
+def robust_trial_task(spec: dict) -> dict:
+    """Worker task: ``spec["motion"]`` (object frame) on one instance under ``spec["perturbation"]``."""
+    base = load_scenario(spec["scenario"])
+    scenario = base.replace(name=f"{spec['scenario']}:{spec['instance']}",
+                            object=dataclasses.replace(base.object, category=spec["category"],
+                                                       instance=spec["instance"]))
+    return run_perturbed_trial(scenario, GraspMotion.from_dict(spec["motion"]), spec["perturbation"])
 
 
 @dataclass
@@ -170,6 +200,152 @@ def sample_training_motions(category, space, instances, template, config, annota
     return candidates, stats
 
 
+@dataclass
+class _Kept:
+    """A grasp kept as knowledge of one training instance: its motion (instance frame) and weight."""
+
+    instance_index: int
+    motion: GraspMotion
+    weight: float
+
+
+def _plan_refused(r: dict) -> bool:
+    sim = r.get("sim_time_s", r.get("sim_s", 0))
+    return r.get("failure_reason", r.get("reason")) in ("unreachable", "collision_before_closing") and sim == 0
+
+
+def search_training_grasps(category, space, instances, template, config, annotations, tip_H, progress=None):
+    """Training's per-instance grasp search (module docstring): ``(kept, stats, record)``.
+
+    ``kept``: the best robust grasps of each instance (:class:`_Kept`); ``stats``: per instance
+    :class:`InstanceStats` (``sampled`` counts candidates, the others trials); ``record``: per instance the
+    start's and the best score and the best variation.
+    """
+    search = config.search
+    constraint = load_constraint(category)
+    grasp_k = template.pose_names.index("grasp")
+    stats = {name: InstanceStats() for name in instances}
+    refs, pivots, searches, perts = [], [], [], []
+    for i, name in enumerate(instances):
+        ref = warp_poses(space.canonical, space.W_train[i], space.beta, template.poses, anchor=tip_H,
+                         rotation_radius=config.grasp_rotation_radius)
+        refs.append(GraspMotion(ref, template.pose_names, dict(template.postures), "object", template.lift_height,
+                                template.hold_time))
+        pivots.append(ref[grasp_k, :3, :3] @ tip_H + ref[grasp_k, :3, 3])
+        seed = int(np.random.SeedSequence([config.seed, i]).generate_state(1)[0])
+        searches.append(CemSearch(np.zeros(len(VARIATION_SCALE)), search.spread * VARIATION_SCALE,
+                                  params=dataclasses.replace(search.cem, seed=seed)))
+        perts.append([perturbation(search.robustness, name, k) for k in range(search.robustness.perturbations)])
+    evaluated: list[list[tuple[float, int, np.ndarray, GraspMotion]]] = [[] for _ in instances]
+    for rnd in range(search.cem.rounds):
+        X = [sr.ask() for sr in searches]
+        motions, specs, owners = {}, [], []
+        for i, name in enumerate(instances):
+            regions = annotations[name].get("regions", {})
+            for j, v in enumerate(X[i]):
+                m = vary_motion_about(refs[i], pivots[i], v)
+                stats[name].sampled += 1
+                if not constraint.check(m.poses[grasp_k], refs[i].poses[grasp_k], regions, tip_H)[0]:
+                    stats[name].rejected_constraint += 1
+                    continue
+                motions[i, j] = m
+                for p in perts[i]:
+                    specs.append({"task": "robust_trial", "scenario": f"{category}_default", "category": category,
+                                  "instance": name, "motion": m.to_dict(), "perturbation": p})
+                    owners.append((i, j))
+        outcomes = run_tasks(robust_trial_task, specs, cache_dir=config.cache_dir, code_version=trial_code_version(),
+                             workers=config.workers, ray_address=config.ray,
+                             progress=(lambda o, d, t: progress("trials", d, t)) if progress else None)
+        trials: dict[tuple[int, int], list[dict]] = {}
+        for key, out in zip(owners, outcomes):
+            r = out.result
+            st = stats[instances[key[0]]]
+            if r.get("status") == "error":
+                st.errors += 1
+            elif _plan_refused(r):
+                st.rejected_plan += 1
+            else:
+                st.simulated += 1
+                st.grasped += bool(r.get("grasp"))
+                st.functional += bool(r.get("functional"))
+            trials.setdefault(key, []).append(r)
+        w = search.robustness.grasp_weight
+        for i, sr in enumerate(searches):
+            scores = np.zeros(len(X[i]))
+            for j in range(len(X[i])):
+                ts = trials.get((i, j), [])
+                if ts:
+                    scores[j] = float(np.mean([trial_score(t, w) for t in ts]))
+                    if any(t.get("functional") for t in ts):
+                        evaluated[i].append((scores[j], len(evaluated[i]), X[i][j], motions[i, j]))
+            sr.tell(scores)
+        if progress:
+            progress("search", rnd + 1, search.cem.rounds)
+    kept, record = [], {}
+    for i, name in enumerate(instances):
+        best = sorted(evaluated[i], key=lambda e: (-e[0], e[1]))[:search.keep]
+        kept += [_Kept(i, m, float(score)) for score, _, _, m in best]
+        res = searches[i].result
+        record[name] = {"start_score": round(float(res.scores[0][0]), 4), "best_score": round(res.best_score, 4),
+                        "best_variation": variation_dict(res.best), "kept": [round(float(b[0]), 4) for b in best]}
+    return kept, stats, record
+
+
+def fit_grasp_regressor(X, Y, groups, weights, config: TrainingConfig, template: GraspMotion, anchor_H):
+    """The regressor latent -> canonical descriptor: ``(regressor, selection)``.
+
+    ``config.regressor == "ridge"``: ridge with ``config.ridge_alpha`` (rows weighted as in
+    ``core.regression.fit_ridge``). ``"auto"``: on the instances' (weighted) mean descriptors, the
+    candidate of ``core.regression.REGRESSOR_GRID`` with the least leave-one-instance-out error of the
+    functional point (m); ``selection`` names it, with each family's best error (mm). With fewer than
+    3 instances holding grasps there is nothing to choose with: ridge, and ``selection`` says why.
+    """
+    X, Y, groups = np.asarray(X, float), np.asarray(Y, float), np.asarray(groups)
+    if config.regressor == "ridge":
+        return fit_ridge(X, Y, alpha=config.ridge_alpha, groups=groups, weights=weights), {"regressor": "ridge"}
+    _, x, y = instance_means(X, Y, groups, weights)
+    if len(x) < 3:  # nothing to choose with: leave-one-instance-out needs 3
+        return (fit_ridge(X, Y, alpha=config.ridge_alpha, groups=groups, weights=weights),
+                {"regressor": "ridge", "note": f"only {len(x)} instances with grasps: no leave-one-out choice"})
+    g = np.arange(len(x))
+
+    def error(pred, rows):
+        c = functional_point(pred, template, anchor_H)
+        return float(np.mean([np.linalg.norm(c - functional_point(r, template, anchor_H)) for r in rows]))
+
+    families = {n: select_regressor(x, y, g, error, (n,)) for n in REGRESSOR_GRID}
+    name, hyper, err = min(families.values(), key=lambda f: f[2])
+    regressor = REGRESSOR_GRID[name][0](x, y, g, **hyper)
+    return regressor, {"regressor": name, "hyperparameters": hyper, "loo_error_mm": round(1000 * err, 2),
+                       "loo_error_mm_by_family": {n: round(1000 * f[2], 2) for n, f in families.items()}}
+
+
+def _sampled_training_grasps(category, space, instances, template, config, annotations, tip_H, progress):
+    """The paper's step 3: random samples around the warped motion, each one trial; its functional successes."""
+    candidates, stats = sample_training_motions(category, space, instances, template, config, annotations, tip_H)
+    specs = [{"task": "grasp_trial", "scenario": f"{category}_default", "category": category,
+              "instance": instances[c.instance_index], "motion": c.motion.to_dict()} for c in candidates]
+    outcomes = run_tasks(grasp_trial_task, specs, cache_dir=config.cache_dir, code_version=trial_code_version(),
+                         workers=config.workers, ray_address=config.ray,
+                         progress=(lambda o, d, t: progress("trials", d, t)) if progress else None)
+    kept = []
+    for cand, out in zip(candidates, outcomes):
+        st = stats[instances[cand.instance_index]]
+        r = out.result
+        if r.get("status") == "error":
+            st.errors += 1
+            continue
+        if _plan_refused(r):
+            st.rejected_plan += 1
+            continue
+        st.simulated += 1
+        st.grasped += bool(r.get("grasp_success"))
+        if r.get("functional_success"):
+            st.functional += 1
+            kept.append(_Kept(cand.instance_index, cand.motion, 1.0))
+    return kept, stats
+
+
 def train_category(
     category: str,
     instances: list[str] | None = None,
@@ -200,42 +376,30 @@ def train_category(
     template = load_handwritten_motion(category, canonical)
     annotations = {n: load_annotations(category, n) for n in instances}
     tip_H = functional_point_in_hand(template, annotations[canonical], load_constraint(category).region)
-    candidates, stats = sample_training_motions(category, space, instances, template, config, annotations, tip_H)
-    specs = [{"task": "grasp_trial", "scenario": f"{category}_default", "category": category,
-              "instance": instances[c.instance_index], "motion": c.motion.to_dict()} for c in candidates]
     t1 = time.perf_counter()
-    outcomes = run_tasks(grasp_trial_task, specs, cache_dir=config.cache_dir, code_version=trial_code_version(),
-                         workers=config.workers, ray_address=config.ray,
-                         progress=(lambda o, d, t: progress("trials", d, t)) if progress else None)
+    if config.search is None:
+        kept, stats = _sampled_training_grasps(category, space, instances, template, config, annotations, tip_H,
+                                               progress)
+        search_record = None
+    else:
+        kept, stats, search_record = search_training_grasps(category, space, instances, template, config,
+                                                            annotations, tip_H, progress)
     t_trials = time.perf_counter() - t1
-
-    X, Y, groups = [], [], []
-    for cand, out in zip(candidates, outcomes):
-        name = instances[cand.instance_index]
-        st = stats[name]
-        r = out.result
-        if r.get("status") == "error":
-            st.errors += 1
-            continue
-        if r.get("failure_reason") in ("unreachable", "collision_before_closing") and r.get("sim_time_s", 0) == 0:
-            st.rejected_plan += 1
-            continue
-        st.simulated += 1
-        st.grasped += bool(r.get("grasp_success"))
-        if r.get("functional_success"):
-            st.functional += 1
-            i = cand.instance_index
-            canon = inverse_warp_poses(space.canonical, space.W_train[i], space.beta, cand.motion.poses,
-                                       anchor=tip_H, rotation_radius=config.grasp_rotation_radius)
-            m = GraspMotion(canon, template.pose_names, dict(template.postures), "object",
-                            template.lift_height, template.hold_time)
-            X.append(space.latent_train[i])
-            Y.append(descriptor_vector(m))
-            groups.append(i)
-    if not Y:
+    if not kept:
         raise InputError(f"{category}: no sampled grasp succeeded functionally on any training instance; "
                          "nothing to learn (check the canonical grasp with diagrams/execute_grasp.py)")
-    regressor = fit_ridge(np.array(X), np.array(Y), alpha=config.ridge_alpha, groups=groups)
+    X, Y, groups, weights = [], [], [], []
+    for k in kept:
+        canon = inverse_warp_poses(space.canonical, space.W_train[k.instance_index], space.beta, k.motion.poses,
+                                   anchor=tip_H, rotation_radius=config.grasp_rotation_radius)
+        m = GraspMotion(canon, template.pose_names, dict(k.motion.postures), "object", template.lift_height,
+                        template.hold_time)
+        X.append(space.latent_train[k.instance_index])
+        Y.append(descriptor_vector(m))
+        groups.append(k.instance_index)
+        weights.append(k.weight)
+    weights = None if config.search is None else np.array(weights)
+    regressor, selection = fit_grasp_regressor(X, Y, groups, weights, config, template, tip_H)
     n_sim = sum(s.simulated for s in stats.values())
     summary = {
         "trials_simulated": n_sim,
@@ -249,7 +413,10 @@ def train_category(
         "trials_per_s": round(n_sim / t_trials, 3) if t_trials > 0 else None,
         "per_instance": {n: asdict(s) for n, s in stats.items()},
         "q": space.q,
+        "regression": selection,
     }
+    if search_record is not None:
+        summary["search"] = search_record
     params = {k: (asdict(v) if hasattr(v, "__dataclass_fields__") else v) for k, v in asdict(config).items()}
     for run_only in ("cache_dir", "workers", "ray"):
         params.pop(run_only, None)
@@ -258,4 +425,4 @@ def train_category(
                          grasp_anchor_H=tuple(float(v) for v in tip_H),
                          grasp_rotation_radius=config.grasp_rotation_radius,
                          training_latent=np.array(X), training_descriptors=np.array(Y),
-                         training_groups=np.array(groups, np.int64))
+                         training_groups=np.array(groups, np.int64), training_weights=weights)

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import time
 from collections import OrderedDict
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -29,13 +29,38 @@ from pydrake.systems.framework import DiagramBuilder, EventStatus
 from catgrasp_drake.core.fileio import atomic_write_text
 from catgrasp_drake.errors import InputError
 from catgrasp_drake.grasping.motion import GraspMotion
+from catgrasp_drake.grasping.robustness import object_offset
 from catgrasp_drake.planning.model import PlanningModel
 from catgrasp_drake.planning.records import GraspPlan, PlanParams, hold_plan
 from catgrasp_drake.robot.models import HAND_BASE_LINK, INDEX_DISTAL_LINK, load_hand_postures
+from catgrasp_drake.runner import code_fingerprint
 from catgrasp_drake.station.builder import StationHandles, add_station, apply_context_knobs, posture_category
 from catgrasp_drake.station.judge import ContactRecord, JudgeSpec, Snapshot, Verdict, judge
 from catgrasp_drake.station.scenario import Scenario
 from catgrasp_drake.systems.grasp_execution import PlanPlayback
+
+_ROOT = Path(__file__).resolve().parents[1]
+#: Files whose contents decide a trial's outcome: trial caches (training, grasp search) are keyed by
+#: their hash (``runner.code_fingerprint``: contents, not paths).
+TRIAL_CODE_PATHS = (
+    _ROOT / "catgrasp_drake" / "station",
+    _ROOT / "catgrasp_drake" / "planning",
+    _ROOT / "catgrasp_drake" / "systems" / "grasp_execution.py",
+    _ROOT / "catgrasp_drake" / "trial.py",
+    _ROOT / "catgrasp_drake" / "robot",
+    _ROOT / "catgrasp_drake" / "grasping" / "motion.py",
+    _ROOT / "catgrasp_drake" / "grasping" / "robustness.py",
+    _ROOT / "models" / "svh",
+    _ROOT / "models" / "ur10",
+    _ROOT / "models" / "station.scenarios.yaml",
+    _ROOT / "models" / "objects",
+)
+
+
+def trial_code_version() -> str:
+    """The fingerprint of :data:`TRIAL_CODE_PATHS`."""
+    return code_fingerprint(TRIAL_CODE_PATHS)
+
 
 #: Hydroelastic patches contribute at most this many points (centroid + face centroids).
 MAX_POINTS_PER_PATCH = 64
@@ -350,3 +375,16 @@ def simulate_and_judge(diagram, context, station: StationHandles, timeline, spec
                 atomic_write_text(record_html, meshcat.StaticHtml())
     verdict = judge(spec, initial, before_close, after_lift, after_hold, after_shake, end)
     return verdict, end.X_WO, end, context.get_time()
+
+
+def run_perturbed_trial(scenario: Scenario, motion_O: GraspMotion, perturbation: dict) -> dict:
+    """``motion_O`` (object frame, planned for the scenario's object) executed on an object perturbed by
+    ``perturbation`` (:func:`catgrasp_drake.grasping.robustness.perturbation`: pose offset, friction,
+    mass factor). Returns the compact, JSON-able outcome a robustness score is computed from."""
+    scenario = scenario.replace(plant=replace(scenario.plant, object_friction=perturbation["friction"],
+                                              object_mass_scale=perturbation["mass_scale"]))
+    E = object_offset(perturbation)
+    r = run_grasp_trial(scenario, replace(motion_O, poses=np.linalg.inv(E) @ motion_O.poses))
+    return {"grasp": bool(r.grasp_success), "functional": bool(r.functional_success), "reason": r.failure_reason,
+            "tilt_deg": round(float(r.object_tilt_deg), 3), "trigger_force_N": r.trigger_force_N,
+            "sim_s": round(float(r.sim_time_s), 3), "wall_s": round(float(r.wall_time_s), 3)}

@@ -31,6 +31,12 @@ class LinearRegressor:
     coef: np.ndarray
     intercept: np.ndarray
     alpha: float
+    kind = "ridge"
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """(q, D): latent size in, descriptor size out."""
+        return self.coef.shape[1], self.coef.shape[0]
 
     def predict(self, x) -> np.ndarray:
         """Predict descriptors for one latent vector (q,) or a batch (n, q)."""
@@ -45,11 +51,13 @@ class LinearRegressor:
         return self.intercept + x @ self.coef.T
 
 
-def fit_ridge(X, Y, *, alpha: float = 1e-2, groups=None) -> LinearRegressor:
+def fit_ridge(X, Y, *, alpha: float = 1e-2, groups=None, weights=None) -> LinearRegressor:
     """Fit ``Y (n, D) ~ X (n, q)``; ``groups`` (n,) labels rows of the same instance.
 
-    With ``groups``, rows are weighted 1/size-of-their-group (see module doc).
-    ``alpha`` >= 0 is the ridge penalty in units of the (unit-variance) latent space.
+    With ``groups``, rows are weighted 1/size-of-their-group (see module doc), or, with ``weights``
+    (n,) >= 0 as well (e.g. robustness scores), by their share of their group's total weight: every
+    instance still counts as one. ``alpha`` >= 0 is the ridge penalty in units of the (unit-variance)
+    latent space.
     """
     X = real_array(X, "regression: X", "(n, q) array")
     Y = real_array(Y, "regression: Y", "(n, D) array")
@@ -63,15 +71,14 @@ def fit_ridge(X, Y, *, alpha: float = 1e-2, groups=None) -> LinearRegressor:
         raise InputError(f"regression: training data have values beyond {_MAX_VALUE:g}; rescale them")
     alpha = non_negative(alpha, "regression: alpha")
     if groups is None:
-        w = np.ones(X.shape[0])
+        w = np.ones(X.shape[0]) if weights is None else _group_shares(np.zeros(X.shape[0]), weights)
     else:
         g = np.asarray(groups)
         if g.shape != (X.shape[0],):
             raise InputError(f"regression: groups must label each of the {X.shape[0]} rows, got shape {g.shape}")
         if g.dtype.kind == "f" and not np.all(np.isfinite(g)):
             raise InputError("regression: groups contain NaN or inf")
-        _, inverse, counts = np.unique(g, return_inverse=True, return_counts=True)
-        w = 1.0 / counts[inverse.reshape(-1)]
+        w = _group_shares(g, weights)
     w = w / w.sum()
     x_mean = w @ X
     y_mean = w @ Y
@@ -90,9 +97,25 @@ def fit_ridge(X, Y, *, alpha: float = 1e-2, groups=None) -> LinearRegressor:
     return LinearRegressor(coef=coef, intercept=intercept, alpha=float(alpha))
 
 
+def _group_shares(g: np.ndarray, weights=None) -> np.ndarray:
+    """Each row's share of its group (the shares of a group sum to 1): equal, or by ``weights`` (n,) >= 0."""
+    _, inverse, counts = np.unique(g, return_inverse=True, return_counts=True)
+    inverse = inverse.reshape(-1)
+    if weights is None:
+        return 1.0 / counts[inverse]
+    w = real_array(weights, "regression: weights", "(n,) array")
+    if w.shape != g.shape or not np.all(np.isfinite(w)) or np.any(w < 0):
+        raise InputError(f"regression: weights must be {g.shape[0]} finite values >= 0, got shape {w.shape}")
+    totals = np.bincount(inverse, weights=w)
+    if np.any(totals <= 0):
+        raise InputError("regression: every group needs a positive total weight")
+    return w / totals[inverse]
+
+
 # ----------------------------------------------------------------------------- shape-dependent regressors
-def instance_means(X, Y, groups) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``(labels, x (m, q), y (m, D))``: one row per instance, its latent vector and mean descriptor.
+def instance_means(X, Y, groups, weights=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(labels, x (m, q), y (m, D))``: one row per instance, its latent vector and mean descriptor
+    (weighted by ``weights`` (n,) >= 0 within the instance, if given).
 
     With every instance weighted equally (module docstring), fitting the rows is fitting these means.
     Rows of one instance must share their latent vector."""
@@ -106,7 +129,11 @@ def instance_means(X, Y, groups) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     x = np.stack([X[inverse == k][0] for k in range(len(labels))])
     if any(np.abs(X[inverse == k] - x[k]).max() > 1e-9 for k in range(len(labels))):
         raise InputError("regression: rows of one instance have different latent vectors")
-    y = np.stack([Y[inverse == k].mean(axis=0) for k in range(len(labels))])
+    if weights is None:
+        y = np.stack([Y[inverse == k].mean(axis=0) for k in range(len(labels))])
+    else:
+        share = _group_shares(g, weights)
+        y = np.stack([share[inverse == k] @ Y[inverse == k] for k in range(len(labels))])
     return labels, x, y
 
 
@@ -119,6 +146,11 @@ class KernelRidgeRegressor:
     intercept: np.ndarray  # (D,)
     length_scale: float
     alpha: float
+    kind = "kernel_ridge"
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        return self.x_train.shape[1], self.dual.shape[1]
 
     def predict(self, x) -> np.ndarray:
         x = real_array(x, "latent vector", f"({self.x_train.shape[1]},) or (n, {self.x_train.shape[1]}) array")
@@ -151,6 +183,11 @@ class NearestInstanceRegressor:
 
     x_train: np.ndarray
     y_train: np.ndarray
+    kind = "nearest"
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        return self.x_train.shape[1], self.y_train.shape[1]
 
     def predict(self, x) -> np.ndarray:
         x = real_array(x, "latent vector", "(q,) or (n, q) array")
@@ -166,6 +203,43 @@ def fit_nearest(X, Y, *, groups=None) -> NearestInstanceRegressor:
     groups = np.arange(len(np.asarray(X))) if groups is None else groups
     _, x, y = instance_means(X, Y, groups)
     return NearestInstanceRegressor(x, y)
+
+
+#: Any fitted regressor: ``predict(x (q,) or (n, q))``, ``shape`` (q, D) and ``kind``.
+Regressor = LinearRegressor | KernelRidgeRegressor | NearestInstanceRegressor
+_ARRAYS = {"ridge": ("coef", "intercept"), "kernel_ridge": ("x_train", "dual", "intercept"),
+           "nearest": ("x_train", "y_train")}
+_SCALARS = {"ridge": ("alpha",), "kernel_ridge": ("length_scale", "alpha"), "nearest": ()}
+_CLASSES = {"ridge": LinearRegressor, "kernel_ridge": KernelRidgeRegressor, "nearest": NearestInstanceRegressor}
+
+
+def regressor_to_arrays(regressor: Regressor) -> tuple[dict, dict]:
+    """``(arrays, meta)``: the regressor's arrays by name and a JSON-able header (its kind and scalars)."""
+    kind = regressor.kind
+    arrays = {name: np.asarray(getattr(regressor, name), np.float64) for name in _ARRAYS[kind]}
+    return arrays, {"kind": kind} | {name: float(getattr(regressor, name)) for name in _SCALARS[kind]}
+
+
+def regressor_from_arrays(arrays: dict, meta: dict) -> Regressor:
+    """The inverse of :func:`regressor_to_arrays`; InputError naming what is missing or inconsistent."""
+    kind = meta.get("kind")
+    if kind not in _CLASSES:
+        raise InputError(f"regressor: unknown kind {kind!r}; known: {', '.join(_CLASSES)}")
+    try:
+        a = {name: np.asarray(arrays[name], np.float64) for name in _ARRAYS[kind]}
+        scalars = {name: float(meta[name]) for name in _SCALARS[kind]}
+    except (KeyError, TypeError, ValueError) as e:
+        raise InputError(f"regressor ({kind}): missing or malformed entry {e}") from None
+    if not all(np.all(np.isfinite(v)) for v in (*a.values(), *scalars.values())):
+        raise InputError(f"regressor ({kind}): arrays or parameters are not finite")
+    first, *rest = a.values()
+    rows_ok = {"ridge": lambda: first.ndim == 2 and a["intercept"].shape == first.shape[:1],
+               "kernel_ridge": lambda: (first.ndim == 2 and a["dual"].ndim == 2 and len(a["dual"]) == len(first)
+                                        and a["intercept"].shape == a["dual"].shape[1:]),
+               "nearest": lambda: first.ndim == 2 and a["y_train"].ndim == 2 and len(a["y_train"]) == len(first)}
+    if not rows_ok[kind]():
+        raise InputError(f"regressor ({kind}): array shapes are inconsistent")
+    return _CLASSES[kind](**a, **scalars)
 
 
 #: The regressors a category model may use: name -> (fit function, hyperparameter grid).

@@ -70,3 +70,10 @@ def motion_from_descriptor(vector, template: GraspMotion) -> GraspMotion:
     for i, name in enumerate(REGRESSED_POSTURES):
         postures[name] = v[off + i * NUM_HAND_JOINTS: off + (i + 1) * NUM_HAND_JOINTS]
     return GraspMotion(poses, template.pose_names, postures, template.frame, template.lift_height, template.hold_time)
+
+
+def functional_point(vector, template: GraspMotion, anchor_H) -> np.ndarray:
+    """The grasp's functional point (``anchor_H``: m, hand frame -- the trigger or handle centre carried by
+    the hand) in the descriptor's frame, at the ``grasp`` control pose (m)."""
+    P = motion_from_descriptor(vector, template).pose("grasp")
+    return P[:3, :3] @ np.asarray(anchor_H, float) + P[:3, 3]

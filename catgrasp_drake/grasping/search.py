@@ -78,6 +78,68 @@ def _vector(value, d: int | None, name: str) -> np.ndarray:
     return a
 
 
+class CemSearch:
+    """The cross-entropy method as ask/tell (module docstring), so several searches can share one batch of
+    trials: ``X = search.ask()`` gives the round's candidates (population, d), ``search.tell(scores)``
+    refits the Gaussian; ``search.result`` holds the best candidate and every round so far."""
+
+    def __init__(self, mean, std, *, lower=None, upper=None, params: CemParams = CemParams()):
+        mean = _vector(mean, None, "mean")
+        d = mean.size
+        std = _vector(std, d, "std")
+        if np.any(std < 0):
+            raise InputError("std: expected non-negative values")
+        self.lower = np.full(d, -np.inf) if lower is None else _vector(lower, d, "lower")
+        self.upper = np.full(d, np.inf) if upper is None else _vector(upper, d, "upper")
+        if np.any(self.lower > self.upper) or np.any(mean < self.lower) or np.any(mean > self.upper):
+            raise InputError("lower/upper: the bounds must hold the mean (lower <= mean <= upper)")
+        self.params = params
+        self._start = mean
+        self._rng = np.random.default_rng(params.seed)
+        self._floor = params.min_std_fraction * std
+        self._pending: np.ndarray | None = None
+        self.result = CemResult(best=mean.copy(), best_score=-np.inf, mean=mean.copy(), std=std.copy())
+
+    @property
+    def round(self) -> int:
+        """Rounds told so far."""
+        return len(self.result.scores)
+
+    @property
+    def done(self) -> bool:
+        return self.round >= self.params.rounds
+
+    def ask(self) -> np.ndarray:
+        """This round's candidates (population, d); the first round's first candidate is the start."""
+        if self.done:
+            raise InputError(f"the search has run its {self.params.rounds} rounds")
+        if self._pending is None:
+            r, p = self.result, self.params
+            X = np.clip(r.mean + r.std * self._rng.standard_normal((p.population, r.mean.size)), self.lower,
+                        self.upper)
+            if self.round == 0:
+                X[0] = self._start
+            self._pending = X
+        return self._pending.copy()
+
+    def tell(self, scores) -> None:
+        """Score this round's candidates (population,) and refit the sampling Gaussian to the elite."""
+        if self._pending is None:
+            raise InputError("tell: ask for the round's candidates first")
+        X, p, r = self._pending, self.params, self.result
+        scores = _vector(scores, p.population, "evaluate(...) scores")
+        self._pending = None
+        r.candidates.append(X)
+        r.scores.append(scores)
+        i = int(np.argmax(scores))  # first of the ties: the start wins a tie in round 0
+        if scores[i] > r.best_score:
+            r.best, r.best_score = X[i].copy(), float(scores[i])
+        elite = X[np.argsort(-scores, kind="stable")[:p.elite]]
+        a = p.alpha
+        r.mean = a * elite.mean(axis=0) + (1 - a) * r.mean
+        r.std = np.maximum(a * elite.std(axis=0) + (1 - a) * r.std, self._floor)
+
+
 def cem_maximize(evaluate: Callable[[np.ndarray], np.ndarray], mean, std, *, lower=None, upper=None,
                  params: CemParams = CemParams(), on_round: Callable | None = None) -> CemResult:
     """Maximise ``evaluate`` by the cross-entropy method (module docstring).
@@ -87,32 +149,11 @@ def cem_maximize(evaluate: Callable[[np.ndarray], np.ndarray], mean, std, *, low
     ``on_round(round_index, candidates, scores)`` is called after every
     round (progress, checkpoints). Returns a :class:`CemResult`.
     """
-    mean = _vector(mean, None, "mean")
-    d = mean.size
-    std = _vector(std, d, "std")
-    if np.any(std < 0):
-        raise InputError("std: expected non-negative values")
-    lower = np.full(d, -np.inf) if lower is None else _vector(lower, d, "lower")
-    upper = np.full(d, np.inf) if upper is None else _vector(upper, d, "upper")
-    if np.any(lower > upper) or np.any(mean < lower) or np.any(mean > upper):
-        raise InputError("lower/upper: the bounds must hold the mean (lower <= mean <= upper)")
-    rng = np.random.default_rng(params.seed)
-    floor = params.min_std_fraction * std
-    result = CemResult(best=mean.copy(), best_score=-np.inf, mean=mean.copy(), std=std.copy())
-    for k in range(params.rounds):
-        X = np.clip(result.mean + result.std * rng.standard_normal((params.population, d)), lower, upper)
-        if k == 0:
-            X[0] = mean
-        scores = _vector(evaluate(X.copy()), params.population, "evaluate(...) scores")
-        result.candidates.append(X)
-        result.scores.append(scores)
-        i = int(np.argmax(scores))  # first of the ties: the start wins a tie in round 0
-        if scores[i] > result.best_score:
-            result.best, result.best_score = X[i].copy(), float(scores[i])
-        elite = X[np.argsort(-scores, kind="stable")[:params.elite]]
-        a = params.alpha
-        result.mean = a * elite.mean(axis=0) + (1 - a) * result.mean
-        result.std = np.maximum(a * elite.std(axis=0) + (1 - a) * result.std, floor)
+    search = CemSearch(mean, std, lower=lower, upper=upper, params=params)
+    while not search.done:
+        k = search.round
+        X = search.ask()
+        search.tell(evaluate(X.copy()))
         if on_round is not None:
-            on_round(k, X, scores)
-    return result
+            on_round(k, X, search.result.scores[-1])
+    return search.result

@@ -22,9 +22,11 @@ from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 from catgrasp_drake.errors import InputError
 from catgrasp_drake.grasping.motion import GraspMotion
+from catgrasp_drake.grasping.sampling import perturb_poses
 from catgrasp_drake.robot.models import HAND_ACTUATED_JOINTS, hand_joint_limits
 from catgrasp_drake.station.handwritten import shifted_motion
 
@@ -89,6 +91,21 @@ def vary_motion(motion: GraspMotion, category: str, instance: str, v, *,
     """``motion`` (object frame, on ``instance``) with the variation ``v`` applied (module docstring)."""
     v = _check(v)
     out = shifted_motion(motion, category, instance, v[:3], v[3:6], annotations_dir=annotations_dir)
-    postures = dict(out.postures)
+    return _varied_closing(out, v)
+
+
+def vary_motion_about(motion: GraspMotion, pivot_O, v) -> GraspMotion:
+    """``motion`` (object frame) with the variation ``v`` applied, turned about ``pivot_O`` (m, object frame)
+    instead of an annotated region's centre -- e.g. about the warped functional point of a grasp
+    transferred onto an instance (``catgrasp_drake.training``)."""
+    v = _check(v)
+    T = np.eye(4)
+    T[:3, :3] = Rotation.from_euler("xyz", v[3:6], degrees=True).as_matrix()
+    T[:3, 3] = v[:3]
+    return _varied_closing(replace(motion, poses=perturb_poses(motion.poses, T, np.asarray(pivot_O, float))), v)
+
+
+def _varied_closing(motion: GraspMotion, v: np.ndarray) -> GraspMotion:
+    postures = dict(motion.postures)
     postures["closed"] = varied_posture(postures["closed"], v)
-    return replace(out, postures=postures)
+    return replace(motion, postures=postures)

@@ -2,10 +2,18 @@
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 
-from catgrasp_drake.core.regression import fit_ridge
+from catgrasp_drake.core.regression import (
+    REGRESSOR_GRID,
+    fit_ridge,
+    instance_means,
+    regressor_from_arrays,
+    regressor_to_arrays,
+)
 from catgrasp_drake.errors import InputError
 
 
@@ -106,3 +114,41 @@ def test_kernel_ridge_fits_instance_means_and_rejects_bad_input():
         instance_means(X + np.arange(len(X))[:, None], Y, g)
     with pytest.raises(InputError, match="latent vector"):
         model.predict([1.0, 2.0])
+
+
+def test_robustness_weights_act_within_an_instance_and_every_instance_still_counts_once():
+    # instance 1 has two grasps weighted 3:1; a saturated model passes through each weighted mean
+    x = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
+    groups = np.array([0, 1, 1, 2])
+    Y = np.array([[1.0, 0.0], [4.0, 8.0], [0.0, 0.0], [2.0, 2.0]])
+    w = np.array([0.5, 0.9, 0.3, 1.0])
+    reg = fit_ridge(x[groups], Y, alpha=0.0, groups=groups, weights=w)
+    np.testing.assert_allclose(reg.predict(x[1]), [3.0, 6.0], atol=1e-12)
+    np.testing.assert_allclose(reg.predict(x[0]), Y[0], atol=1e-12)
+    _, xm, ym = instance_means(x[groups], Y, groups, w)
+    np.testing.assert_allclose(ym, [[1.0, 0.0], [3.0, 6.0], [2.0, 2.0]])
+    with pytest.raises(InputError, match="weights"):
+        fit_ridge(x[groups], Y, groups=groups, weights=[1.0, -1.0, 1.0, 1.0])
+    with pytest.raises(InputError, match="positive total weight"):
+        fit_ridge(x[groups], Y, groups=groups, weights=[0.0, 1.0, 1.0, 1.0])
+
+
+@pytest.mark.parametrize("name", ["ridge", "kernel_ridge", "nearest"])
+def test_every_regressor_kind_round_trips_through_arrays(name):
+    rng = np.random.default_rng(3)
+    X, Y = rng.normal(size=(6, 2)), rng.normal(size=(6, 5))
+    fit, grid = REGRESSOR_GRID[name]
+    reg = fit(X, Y, np.arange(6), **grid[-1])
+    arrays, meta = regressor_to_arrays(reg)
+    json.dumps(meta)
+    again = regressor_from_arrays(arrays, meta)
+    assert again.kind == reg.kind and again.shape == (2, 5)
+    x = rng.normal(size=(3, 2))
+    np.testing.assert_array_equal(again.predict(x), reg.predict(x))
+    with pytest.raises(InputError, match="unknown kind"):
+        regressor_from_arrays(arrays, meta | {"kind": "forest"})
+    first = next(iter(arrays))
+    with pytest.raises(InputError, match="missing"):
+        regressor_from_arrays({k: v for k, v in arrays.items() if k != first}, meta)
+    with pytest.raises(InputError, match="inconsistent"):
+        regressor_from_arrays(arrays | {first: arrays[first][:, :1].T}, meta)

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from catgrasp_drake.errors import InputError
-from catgrasp_drake.grasping.search import CemParams, cem_maximize
+from catgrasp_drake.grasping.search import CemParams, CemSearch, cem_maximize
 
 
 def _noisy_peak(target, noise, seed=1):
@@ -55,3 +55,23 @@ def test_cem_rejects_bad_settings_in_one_line():
         cem_maximize(f, [0.0, 0.0], [1.0, np.nan])
     with pytest.raises(InputError, match="scores"):
         cem_maximize(lambda X: np.zeros(len(X) + 1), [0.0, 0.0], [1.0, 1.0])
+
+
+def test_ask_and_tell_is_the_same_search_as_cem_maximize():
+    def evaluate(X):
+        return -np.sum((X - [0.3, -0.2]) ** 2, axis=1)
+
+    p = CemParams(rounds=4, population=6, elite=2, seed=5)
+    reference = cem_maximize(evaluate, [0.0, 0.0], [0.5, 0.5], params=p)
+    search = CemSearch([0.0, 0.0], [0.5, 0.5], params=p)
+    while not search.done:
+        X = search.ask()
+        np.testing.assert_array_equal(search.ask(), X)  # asking twice gives the same round
+        search.tell(evaluate(X))
+    for a, b in zip(search.result.candidates, reference.candidates):
+        np.testing.assert_array_equal(a, b)
+    assert search.result.best_score == reference.best_score
+    with pytest.raises(InputError, match="rounds"):
+        search.ask()
+    with pytest.raises(InputError, match="ask"):
+        CemSearch([0.0], [1.0], params=p).tell([0.0] * 6)

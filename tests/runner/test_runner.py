@@ -81,7 +81,7 @@ def test_code_fingerprint_follows_contents_not_locations(tmp_path):
 
 
 def test_trial_cache_key_ignores_the_offline_tools():
-    from catgrasp_drake.training import TRIAL_CODE_PATHS
+    from catgrasp_drake.trial import TRIAL_CODE_PATHS
 
     repo = Path(__file__).resolve().parents[2]
     listed = [Path(p).resolve() for p in TRIAL_CODE_PATHS]

@@ -8,7 +8,8 @@ import yaml
 
 from catgrasp_drake.data.dataset import load_annotations
 from catgrasp_drake.errors import InputError
-from catgrasp_drake.grasp_search import Robustness, apply_variation_to_spec, perturbation, trial_score
+from catgrasp_drake.grasp_search import apply_variation_to_spec
+from catgrasp_drake.grasping.robustness import Robustness, perturbation, trial_score
 from catgrasp_drake.robot.models import HAND_ACTUATED_JOINTS, hand_joint_limits, load_hand_postures
 from catgrasp_drake.station.handwritten import GRASPS_DIR, load_handwritten_motion, motion_from_spec
 from catgrasp_drake.station.variation import VARIATION_NAMES, variation_vector, vary_motion
@@ -92,3 +93,15 @@ def test_the_search_scores_candidates_by_their_trials_and_keys_a_given_grasp_fil
     seen.clear()
     search_grasp("mug", ["mug_00"], cem=CemParams(rounds=1, population=2, elite=1), cache_dir=None)
     assert all("grasp_sha256" not in s and "grasp_file" not in s for s in seen)  # the default: in the fingerprint
+
+
+def test_a_variation_about_the_annotated_centre_is_the_variation_of_the_grasp_file():
+    from catgrasp_drake.grasping.constraints import load_constraint
+    from catgrasp_drake.station.variation import vary_motion_about
+
+    v = variation_vector({"dx": 0.003, "roll": 4.0, "yaw": -6.0, "thumb_flexion": 0.2})
+    motion = load_handwritten_motion("drill", "drill_03")
+    centre = load_annotations("drill", "drill_03")["regions"][load_constraint("drill").region]["center"]
+    a, b = vary_motion(motion, "drill", "drill_03", v), vary_motion_about(motion, centre, v)
+    np.testing.assert_array_equal(a.poses, b.poses)
+    np.testing.assert_array_equal(a.posture("closed"), b.posture("closed"))
