@@ -142,7 +142,7 @@ def peak_mib(fn):
 
 def estep_floor(M, N, dtype, repeat=5):
     """Seconds of one fused exp-and-sum pass over M x N exponents, in catgrasp's E-step blocks and threads."""
-    nb = max(16, cpd._BLOCK_ELEMENTS // M)
+    nb = max(16, cpd.BLOCK_ELEMENTS // M)
     threaded = M * N >= 200_000  # as nonrigid_cpd
     if threaded:
         nb = max(16, min(nb, -(-N // cpd.THREADED_BLOCKS)))

@@ -37,6 +37,8 @@ benchmarks/RESULTS_core.md).
 Convergence: EM stops when the objective ``f`` changes by less than
 ``tol`` per target point (``|f_k - f_{k-1}| / N < tol``; differences of ``f``
 do not depend on the coordinate scale), or when ``sigma2`` reaches its floor.
+Both registrations run the EM loop :func:`catgrasp_drake.core.em.em_loop`
+(shared with the latent inference) with their own M-step.
 
 Speed-ups (all exact or with a stated, measured error):
 
@@ -79,6 +81,7 @@ import numpy as np
 import scipy.linalg
 from scipy.spatial import cKDTree
 
+from catgrasp_drake.core.em import MStep, em_loop
 from catgrasp_drake.core.kernels import gaussian_kernel, kernel_width, low_rank_kernel, sqdist
 from catgrasp_drake.core.threads import blas_single_threaded, n_threads
 from catgrasp_drake.core.validation import as_points, count, non_negative, outlier_weight, positive
@@ -96,9 +99,9 @@ SIGMA2_FLOOR = 1e-10
 #: low-rank one (O(M^2) kernel evaluations per product).
 MAX_SOURCE_EXACT = 20_000
 MAX_SOURCE_LOW_RANK = 200_000
-#: Kernel trace fraction kept by ``low_rank="auto"``.
 
-_BLOCK_ELEMENTS = 1 << 19  # E-step block: M x block <= 512k doubles = 4 MB per thread
+#: E-step block: M x block <= 512k doubles = 4 MB per thread.
+BLOCK_ELEMENTS = 1 << 19
 
 
 @dataclass(frozen=True)
@@ -201,7 +204,8 @@ _NO_CLAMP_BOUND = 290.0  # every exponent provably >= -290 (> -300 after roundin
 # float32 blocks: kernel values below float32's normal range (1.18e-38 = e^-87.3) lose digits or flush to 0,
 # which changes a column whose sum is above e^-60 by < M e^-27 relative; columns below are redone
 _BAD_LOGSUM32 = -60.0
-_EPS32 = float(np.finfo(np.float32).eps)
+#: Machine epsilon of float32 (the rounding unit of ``e_step="fast"``'s exponents).
+EPS32 = float(np.finfo(np.float32).eps)
 
 
 def _estep_block(Ya, Ysc, X, Xa, sigma2, log_c, lo, hi, clamp=True):
@@ -297,7 +301,7 @@ def estep(Y_t: np.ndarray, X: np.ndarray, sigma2: float, w: float, *, pool=None,
     # centre for accurate augmented GEMM
     ctr, Ysc, Xc, Ya, Xa = _augmented(Y_t, X, sigma2, dtype)
     clamp = exponent_bound(Ysc, Xc, sigma2) > _NO_CLAMP_BOUND
-    nb = max(16, _BLOCK_ELEMENTS // max(M, 1))
+    nb = max(16, BLOCK_ELEMENTS // max(M, 1))
     if pool is not None:  # at least THREADED_BLOCKS blocks, a fixed number: results independent of the cores
         nb = max(16, min(nb, -(-N // THREADED_BLOCKS)))
     bounds = [(lo, min(N, lo + nb)) for lo in range(0, N, nb)]
@@ -411,7 +415,7 @@ class TruncatedEStep:
             self.mode = "sparse"
             return self._sparse(T, sigma2, r)
         if self.fast:
-            if 8.0 * _EPS32 * exponent_bound(T - self.ctr, self.Xc, sigma2) <= F32_EXPONENT_TOL:
+            if 8.0 * EPS32 * exponent_bound(T - self.ctr, self.Xc, sigma2) <= F32_EXPONENT_TOL:
                 self.mode = "dense32"
                 return estep(T, X, sigma2, w, pool=self.pool, dtype=np.float32)
         self.mode = "dense"
@@ -470,14 +474,6 @@ class TruncatedEStep:
         return _statistics(acc, Pt1, sum_logden, self.ctr, w, sigma2, M, N, D)
 
 
-def sigma2_update(X, T, e: EStep) -> float:
-    D = X.shape[1]
-    xPx = float(e.Pt1 @ (X * X).sum(1))
-    tPt = float(e.P1 @ (T * T).sum(1))
-    trPXT = float((e.PX * T).sum())
-    return (xPx - 2.0 * trPXT + tPt) / (e.Np * D)
-
-
 #: Clouds whose centroids are more than this many (larger) RMS radii apart are "far apart".
 FAR_APART = 10.0
 
@@ -493,7 +489,24 @@ def _check_common(source, target, w, max_iter, tol):
     w = outlier_weight(w)
     max_iter = count(max_iter, "max_iter", 1)
     tol = non_negative(tol, "tol")
+    if Y.shape[1] != X.shape[1]:
+        raise InputError(f"source and target dimensions differ: {Y.shape[1]} vs {X.shape[1]}")
     return Y, X, w, max_iter, tol
+
+
+def _normalized(Y, X, sigma2):
+    """``(center, scale, Yn, Xn, s2)``: the clouds in CPD's normalised units and the starting variance there."""
+    center, scale = joint_normalization(Y, X)
+    Yn, Xn = (Y - center) / scale, (X - center) / scale
+    s2 = initial_sigma2(Yn, Xn) if sigma2 is None else positive(sigma2, "sigma2") / scale**2
+    return center, scale, Yn, Xn, max(s2, SIGMA2_FLOOR)
+
+
+def _reporter(callback, center, scale):
+    """The EM loop's callback for a user ``callback(CPDIteration)`` (normalised units -> the caller's)."""
+    if callback is None:
+        return None
+    return lambda k, T, s2, f: callback(CPDIteration(k, center + scale * T, s2 * scale**2, f))
 
 
 # --------------------------------------------------------------------------- non-rigid
@@ -551,6 +564,21 @@ def _gram_and_rhs(Q, P1, B, pool):
     return S[:, :K], S[:, K:]
 
 
+def _low_rank_mstep(Q, lam_k, P1, B, lam_s2, *, pool=None, split=True):
+    """Solve the M-step with ``G ~ Q diag(lam_k) Q^T`` for ``Z`` (``W = Q Z``, K x D):
+    ``(Q^T d(P1) Q diag(lam_k) + lam_s2 I) Z = Q^T B``. ``split``: the products by :func:`_gram_and_rhs`."""
+    if split:
+        QtDQ, QtB = _gram_and_rhs(Q, P1, B, pool)
+    else:
+        QtDQ, QtB = Q.T @ (P1[:, None] * Q), Q.T @ B
+    A = QtDQ * lam_k[None, :]
+    A[np.diag_indices(len(lam_k))] += lam_s2
+    try:
+        return np.linalg.solve(A, QtB)
+    except np.linalg.LinAlgError:
+        return np.linalg.lstsq(A, QtB, rcond=None)[0]
+
+
 @blas_single_threaded
 def nonrigid_cpd(
     source,
@@ -577,8 +605,6 @@ def nonrigid_cpd(
     ``callback(CPDIteration)`` is called after each iteration.
     """
     Y, X, w, max_iter, tol = _check_common(source, target, w, max_iter, tol)
-    if Y.shape[1] != X.shape[1]:
-        raise InputError(f"source and target dimensions differ: {Y.shape[1]} vs {X.shape[1]}")
     if not isinstance(e_step, str) or e_step not in E_STEPS:
         raise InputError(f"e_step: expected one of {', '.join(E_STEPS)}, got {e_step!r}")
     beta = kernel_width(beta)
@@ -591,14 +617,10 @@ def nonrigid_cpd(
     if _far_apart(Y, X):
         raise InputError(f"source and target are {float(np.linalg.norm(X.mean(0) - Y.mean(0))):.3g} m apart, over "
                          f"{FAR_APART:g}x their size: non-rigid CPD needs them roughly aligned; run rigid_cpd first")
-    center, scale = joint_normalization(Y, X)
-    Yn = (Y - center) / scale
-    Xn = (X - center) / scale
+    center, scale, Yn, Xn, s2 = _normalized(Y, X, sigma2)
     bn = beta / scale
     M, D = Yn.shape
     N = Xn.shape[0]
-    s2 = initial_sigma2(Yn, Xn) if sigma2 is None else positive(sigma2, "sigma2") / scale**2
-    s2 = max(s2, SIGMA2_FLOOR)
 
     # threaded by problem size only (a 1-worker pool on one core): the block layout, hence the rounding
     # of the E-step sums, is the same on every machine
@@ -612,72 +634,38 @@ def nonrigid_cpd(
             Q, lam_k, kept = low_rank_kernel(Yn, bn, low_rank, pool=pool)
             G = None
             rank = Q.shape[1]
+        truncated = None if e_step == "exact" else TruncatedEStep(Xn, w, fast=e_step == "fast", pool=pool)
 
-        Wn = np.zeros((M, D))
-        Z = np.zeros((rank, D)) if Q is not None else None
-        T = Yn.copy()
-        reg = 0.0
-        f_prev = math.inf
-        converged = False
-        it = 0
-        e = None
-        if e_step == "exact":
-            def e_of(T, s2):
-                return estep(T, Xn, s2, w, pool=pool)
-        else:
-            e_of = TruncatedEStep(Xn, w, fast=e_step == "fast", pool=pool)
-        for it in range(1, max_iter + 1):
-            e = e_of(T, s2)
-            f = e.nll + 0.5 * lam * reg
-            if abs(f_prev - f) / N < tol:
-                converged = True
-                it -= 1  # the parameters did not change in this iteration's E-step
-                break
-            f_prev = f
-            if e.Np <= 1e-300:  # every target is an outlier: nothing to fit
-                break
+        def e_of(k, m, s2):
+            return estep(m.centres, Xn, s2, w, pool=pool) if truncated is None else truncated(m.centres, s2)
+
+        def m_step(e, m, s2):  # params: W (exact kernel) or Z (low rank: W = Q Z)
             B = e.PX - e.P1[:, None] * Yn
             if Q is None:
-                Wn = _exact_mstep(G, e.P1, B, lam * s2)
-                V = G @ Wn
-                reg = float((Wn * V).sum())
-            else:
-                if e_step == "exact":
-                    QtDQ, QtB = Q.T @ (e.P1[:, None] * Q), Q.T @ B
-                else:
-                    QtDQ, QtB = _gram_and_rhs(Q, e.P1, B, pool)
-                A = QtDQ * lam_k[None, :]
-                A[np.diag_indices(rank)] += lam * s2
-                try:
-                    Z = np.linalg.solve(A, QtB)
-                except np.linalg.LinAlgError:
-                    Z = np.linalg.lstsq(A, QtB, rcond=None)[0]
-                LZ = lam_k[:, None] * Z
-                V = Q @ LZ
-                reg = float((Z * LZ).sum())
-            T = Yn + V
-            s2 = max(sigma2_update(Xn, T, e), SIGMA2_FLOOR)
-            if callback is not None:
-                callback(CPDIteration(it, center + scale * T, s2 * scale**2, f))
-            if s2 <= SIGMA2_FLOOR:
-                converged = True
-                break
+                W = _exact_mstep(G, e.P1, B, lam * s2)
+                V = G @ W
+                return MStep(Yn + V, 0.5 * lam * float((W * V).sum()), W)
+            Z = _low_rank_mstep(Q, lam_k, e.P1, B, lam * s2, pool=pool, split=e_step != "exact")
+            LZ = lam_k[:, None] * Z
+            return MStep(Yn + Q @ LZ, 0.5 * lam * float((Z * LZ).sum()), Z)
+
+        start = MStep(Yn, 0.0, np.zeros((M, D)) if Q is None else np.zeros((rank, D)))
+        r = em_loop(Xn, e_of, m_step, start, s2, n_iter=max_iter, tol=tol, sigma2_floor=SIGMA2_FLOOR,
+                    callback=_reporter(callback, center, scale))
     finally:
         if pool is not None:
             pool.shutdown()
-    if Q is not None:
-        Wn = Q @ Z
     return NonRigidCPDResult(
-        W=scale * Wn,
-        transformed=center + scale * T,
-        sigma2=s2 * scale**2,
-        iterations=it,
-        converged=converged,
-        objective=float(f),
+        W=scale * (r.m.params if Q is None else Q @ r.m.params),
+        transformed=center + scale * r.m.centres,
+        sigma2=r.sigma2 * scale**2,
+        iterations=r.iterations + (r.stop == "no_mass"),  # (counting the E-step that found no mass, as always)
+        converged=r.converged,
+        objective=float(r.objective),
         beta=beta,
         lam=lam,
         w=w,
-        P1=e.P1 if e is not None else np.zeros(M),
+        P1=r.e.P1 if r.e is not None else np.zeros(M),
         rank=rank,
         kernel_trace_kept=kept,
     )
@@ -728,55 +716,31 @@ def rigid_cpd(
     normalisation, outlier model and convergence rule as :func:`nonrigid_cpd`.
     """
     Y, X, w, max_iter, tol = _check_common(source, target, w, max_iter, tol)
-    if Y.shape[1] != X.shape[1]:
-        raise InputError(f"source and target dimensions differ: {Y.shape[1]} vs {X.shape[1]}")
     shift = np.zeros(Y.shape[1])
     if _far_apart(Y, X):
         # clouds far apart relative to their size (e.g. 1 km): from the identity every posterior is uniform and
         # the scale collapses to 0 for good; register the centroid-aligned source, then compose the shift
         shift = X.mean(axis=0) - Y.mean(axis=0)
         Y = Y + shift
-    center, sc = joint_normalization(Y, X)
-    Yn = (Y - center) / sc
-    Xn = (X - center) / sc
+    center, sc, Yn, Xn, s2 = _normalized(Y, X, sigma2)
     M, D = Yn.shape
-    N = Xn.shape[0]
-    s2 = initial_sigma2(Yn, Xn) if sigma2 is None else positive(sigma2, "sigma2") / sc**2
-    s2 = max(s2, SIGMA2_FLOOR)
-    R, t, s = np.eye(D), np.zeros(D), 1.0
-    T = Yn.copy()
-    f_prev = math.inf
-    f = math.inf
-    converged = False
-    e = None
-    it = 0
-    for it in range(1, max_iter + 1):
-        e = estep(T, Xn, s2, w)
-        f = e.nll
-        if abs(f_prev - f) / N < tol:
-            converged = True
-            it -= 1
-            break
-        f_prev = f
-        if e.Np <= 1e-300:
-            break
-        R, t, s, tr_AR = weighted_procrustes(e.PX, e.P1, e.Pt1, e.Np, Xn, Yn, scale=scale)
-        T = s * Yn @ R.T + t
-        s2 = max(sigma2_update(Xn, T, e), SIGMA2_FLOOR)
-        if callback is not None:
-            callback(CPDIteration(it, center + sc * T, s2 * sc**2, f))
-        if s2 <= SIGMA2_FLOOR:
-            converged = True
-            break
-    t_metric = center + sc * t - s * R @ center + s * R @ shift
+
+    def m_step(e, m, s2):  # params: (R, t, s) in normalised units
+        R, t, s, _ = weighted_procrustes(e.PX, e.P1, e.Pt1, e.Np, Xn, Yn, scale=scale)
+        return MStep(s * Yn @ R.T + t, 0.0, (R, t, s))
+
+    start = MStep(Yn, 0.0, (np.eye(D), np.zeros(D), 1.0))
+    r = em_loop(Xn, lambda k, m, s2: estep(m.centres, Xn, s2, w), m_step, start, s2, n_iter=max_iter, tol=tol,
+                sigma2_floor=SIGMA2_FLOOR, callback=_reporter(callback, center, sc))
+    R, t, s = r.m.params
     return RigidCPDResult(
         R=R,
-        t=t_metric,
+        t=center + sc * t - s * R @ center + s * R @ shift,
         s=float(s),
-        transformed=center + sc * T,
-        sigma2=s2 * sc**2,
-        iterations=it,
-        converged=converged,
-        objective=float(f),
-        P1=e.P1 if e is not None else np.zeros(M),
+        transformed=center + sc * r.m.centres,
+        sigma2=r.sigma2 * sc**2,
+        iterations=r.iterations + (r.stop == "no_mass"),  # (as nonrigid_cpd)
+        converged=r.converged,
+        objective=float(r.objective),
+        P1=r.e.P1 if r.e is not None else np.zeros(M),
     )

@@ -19,10 +19,11 @@ by EM instead of the paper's gradient descent: the E-step gives posteriors
 P; the M-step is closed-form -- a weighted Procrustes with scale for theta
 (the same as rigid CPD) and, because Y is linear in x, a q x q linear solve
 ``(s^2/sigma2 H + prior I) x = s^2/sigma2 g`` for x -- then sigma2 in closed
-form. Each step cannot increase E (between visibility updates, which change
-the mixture), so no step size is needed; ~1.5 ms per
-iteration for a 500-point model and 500 observed points, 190x faster than
-L-BFGS with analytic gradients on the same energy (benchmarks/bench_inference.py).
+form (the EM loop :func:`catgrasp_drake.core.em.em_loop`, shared with CPD).
+Each step cannot increase E (between visibility updates, which change the
+mixture), so no step size is needed; ~1.5 ms per iteration for a 500-point
+model and 500 observed points, 190x faster than L-BFGS with analytic
+gradients on the same energy (benchmarks/bench_inference.py).
 
 Visibility-aware E-step (``camera_position`` given, in the observation
 frame): only the model points visible from the camera under the current
@@ -61,19 +62,14 @@ import math
 import time
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 from scipy.spatial import cKDTree
 
-from catgrasp_drake.core.cpd import (
-    estep,
-    exponent_bound,
-    initial_sigma2,
-    nonrigid_cpd,
-    sigma2_update,
-    weighted_procrustes,
-)
+from catgrasp_drake.core.cpd import EPS32, estep, exponent_bound, initial_sigma2, nonrigid_cpd, weighted_procrustes
 from catgrasp_drake.core.deformation import deform_points, warp_poses
+from catgrasp_drake.core.em import MStep, em_loop
 from catgrasp_drake.core.kernels import kernel_width
 from catgrasp_drake.core.rotations import orthonormalize, rotz
 from catgrasp_drake.core.shape_space import ShapeSpace
@@ -92,7 +88,6 @@ from catgrasp_drake.core.visibility import DEFAULT_RADIUS_FACTOR, MAX_RADIUS_FAC
 from catgrasp_drake.errors import InputError
 
 SIGMA2_MIN_M2 = 1e-8  # (0.1 mm)^2
-_EPS32 = float(np.finfo(np.float32).eps)
 #: Most yaw starts of the search (one per 1 degree).
 MAX_YAW_CANDIDATES = 360
 #: The yaw search's E-step runs in float32 while the rounding bound of its exponents,
@@ -188,6 +183,18 @@ class _State:
     yaw: float = 0.0
 
 
+class _Fit(NamedTuple):
+    """The parameters :meth:`_Problem.run` passes through the EM loop: latent ``x``, similarity ``(R, t, s)``,
+    the model ``Y = model(x)`` (canonical frame) and ``T = s Y R^T + t`` (observation frame, m)."""
+
+    x: np.ndarray
+    R: np.ndarray
+    t: np.ndarray
+    s: float
+    Y: np.ndarray
+    T: np.ndarray
+
+
 class _Problem:
     """Precomputed linear model and options for one observation."""
 
@@ -224,6 +231,39 @@ class _Problem:
         return (math.log(self.w / (1.0 - self.w)) + math.log(n_vis) + 1.5 * math.log(2 * math.pi * sigma2)
                 - self.log_volume)
 
+    def fit(self, x, R, t, s) -> _Fit:
+        """The parameters ``(x, R, t, s)`` with their model ``Y`` (canonical frame) and its pose ``T`` (m)."""
+        Y = self.model(x)
+        return _Fit(x, R, t, s, Y, s * Y @ R.T + t)
+
+    def mstep(self, e, idx, fit: _Fit, O, sigma2) -> _Fit:
+        """Closed-form M-step for the posteriors ``e`` of the model points ``idx`` on the observed points ``O``
+        (m): the pose (weighted Procrustes, scale clamped to the bounds) given ``fit.x``, then ``x`` given the
+        pose, ``(s^2/sigma2 H + prior I) x = s^2/sigma2 g`` (``x`` unchanged if singular)."""
+        x = fit.x
+        Yv = fit.Y[idx]
+        R, t, s, _ = weighted_procrustes(e.PX, e.P1, e.Pt1, e.Np, O, Yv, scale=self.fit_scale)
+        if self.fit_scale:
+            s_clamped = float(np.clip(s, *self.scale_bounds))
+            if s_clamped != s:
+                s = s_clamped
+                mu_x = (e.Pt1 @ O) / e.Np
+                mu_y = (e.P1 @ Yv) / e.Np
+                t = mu_x - s * R @ mu_y
+        if self.q > 0:
+            P1 = e.P1
+            Bv = self.Bm[idx].reshape(-1, self.q)  # (3m, q), rows point-major
+            H = Bv.T @ (Bv * np.repeat(P1, 3)[:, None])
+            Z = (e.PX - P1[:, None] * t) @ R / s  # = P1 * z  (model frame)
+            g = Bv.T @ (Z - P1[:, None] * self.a[idx]).reshape(-1)
+            c = s * s / sigma2
+            A = c * H + self.prior * np.eye(self.q)
+            try:
+                x = np.linalg.solve(A, c * g)
+            except np.linalg.LinAlgError:
+                pass
+        return self.fit(x, R, t, float(s))
+
     def run(self, st: _State, O, n_iter, tol, vis_every=1, pool=None, k_start=0, float32=False, vis_move=0.0):
         """EM iterations ``k_start .. n_iter - 1`` from state ``st`` on observation subset O.
 
@@ -235,15 +275,16 @@ class _Problem:
         that since the last one.
         """
         N = len(O)
-        Y = self.model(st.x)
-        T = st.s * Y @ st.R.T + st.t
-        vis = st.visible if st.visible is not None else self.visible(T)
-        T_vis = T
+        fit = self.fit(st.x, st.R, st.t, st.s)
+        vis = st.visible if st.visible is not None else self.visible(fit.T)
+        T_vis, idx = fit.T, None
         if float32:
             ctr = O.mean(axis=0)
             Oc = O - ctr
-        e_prev = math.inf
-        for k in range(k_start, n_iter):
+
+        def e_step(k, m, sigma2):  # over the model points visible at m.params.T
+            nonlocal vis, T_vis, idx
+            T = m.params.T
             if k > 0 and vis_every and k % vis_every == 0:
                 if not (vis_move > 0.0 and float(np.abs(T - T_vis).max()) < vis_move):
                     vis = self.visible(T)
@@ -254,47 +295,24 @@ class _Problem:
                 idx = np.arange(self.M)
             Tv = T[idx]
             dtype = np.float64
-            if float32 and 8.0 * _EPS32 * exponent_bound(Tv - ctr, Oc, st.sigma2) <= SEARCH_F32_TOL:
+            if float32 and 8.0 * EPS32 * exponent_bound(Tv - ctr, Oc, sigma2) <= SEARCH_F32_TOL:
                 dtype = np.float32
-            e = estep(Tv, O, st.sigma2, self.w, log_uniform=self.log_uniform(len(idx), st.sigma2),
-                      pool=pool if len(idx) * N >= 100_000 else None, dtype=dtype)
-            energy = e.nll + 0.5 * self.prior * float(st.x @ st.x)
-            st.energy = energy
-            if abs(e_prev - energy) / N < tol:
-                st.converged = True
-                break
-            e_prev = energy
-            if e.Np < 1e-9:
-                break
-            st.iterations += 1
-            # pose (weighted Procrustes with scale) given x
-            Yv = Y[idx]
-            R, t, s, _ = weighted_procrustes(e.PX, e.P1, e.Pt1, e.Np, O, Yv, scale=self.fit_scale)
-            if self.fit_scale:
-                s_clamped = float(np.clip(s, *self.scale_bounds))
-                if s_clamped != s:
-                    s = s_clamped
-                    mu_x = (e.Pt1 @ O) / e.Np
-                    mu_y = (e.P1 @ Yv) / e.Np
-                    t = mu_x - s * R @ mu_y
-            # latent x given pose: (s^2/sigma2 H + prior I) x = s^2/sigma2 g
-            if self.q > 0:
-                P1 = e.P1
-                Bv = self.Bm[idx].reshape(-1, self.q)  # (3m, q), rows point-major
-                H = Bv.T @ (Bv * np.repeat(P1, 3)[:, None])
-                Z = (e.PX - P1[:, None] * t) @ R / s  # = P1 * z  (model frame)
-                g = Bv.T @ (Z - P1[:, None] * self.a[idx]).reshape(-1)
-                c = s * s / st.sigma2
-                A = c * H + self.prior * np.eye(self.q)
-                try:
-                    x = np.linalg.solve(A, c * g)
-                except np.linalg.LinAlgError:
-                    x = st.x
-                st.x = x
-            st.R, st.t, st.s = R, t, float(s)
-            Y = self.model(st.x)
-            T = st.s * Y @ st.R.T + st.t
-            st.sigma2 = max(sigma2_update(O, T[idx], e), SIGMA2_MIN_M2)
+            return estep(Tv, O, sigma2, self.w, log_uniform=self.log_uniform(len(idx), sigma2),
+                         pool=pool if len(idx) * N >= 100_000 else None, dtype=dtype)
+
+        def m_step(e, m, sigma2):
+            fit = self.mstep(e, idx, m.params, O, sigma2)
+            return MStep(fit.T[idx], 0.5 * self.prior * float(fit.x @ fit.x), fit)
+
+        start = MStep(fit.T, 0.5 * self.prior * float(st.x @ st.x), fit)
+        r = em_loop(O, e_step, m_step, start, st.sigma2, n_iter=n_iter, tol=tol, sigma2_floor=SIGMA2_MIN_M2,
+                    stop_at_floor=False, min_mass=1e-9, k_start=k_start)
+        st.x, st.R, st.t, st.s = r.m.params[:4]
+        st.sigma2 = r.sigma2
+        if r.e is not None:
+            st.energy = r.objective
+        st.iterations += r.iterations
+        st.converged = st.converged or r.converged
         st.visible = vis
         return st
 

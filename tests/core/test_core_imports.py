@@ -11,6 +11,7 @@ REPO = Path(__file__).resolve().parents[2]
 CORE_MODULES = [
     "catgrasp_drake.core",
     "catgrasp_drake.core.cpd",
+    "catgrasp_drake.core.em",
     "catgrasp_drake.core.deformation",
     "catgrasp_drake.core.rotations",
     "catgrasp_drake.core.shape_space",

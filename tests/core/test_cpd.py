@@ -126,6 +126,24 @@ def test_callback_and_convergence_on_the_objective():
     assert all(b <= a + 1e-9 * abs(a) for a, b in zip(objs, objs[1:]))  # EM never increases f
 
 
+def test_the_em_loop_stops_on_the_floor_on_no_mass_and_on_max_iter():
+    """The stopping rules of the one EM loop (core.em.em_loop) as rigid_cpd and nonrigid_cpd report them."""
+    Y = blob((0.03, 0.06, 0.09, 0.0, 0.01), 200)
+    c, s = np.cos(0.4), np.sin(0.4)
+    X = Y @ np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]).T
+    seen = []
+    r = rigid_cpd(Y, X, callback=seen.append)  # an exact fit: sigma2 reaches its floor
+    assert r.converged and r.iterations == len(seen) < 100 and r.sigma2 < 1e-12
+    assert np.abs(r.transformed - X).max() < 1e-9
+    r = rigid_cpd(Y, X, tol=0.0, max_iter=5)
+    assert not r.converged and r.iterations == 5
+    # far-off targets with a tiny given sigma2 and outliers: every target is an outlier, nothing moves
+    # (the E-step that found no mass is counted as an iteration, as before the loop was shared)
+    for fit in (rigid_cpd(Y, X + 0.3, w=0.5, sigma2=1e-12), nonrigid_cpd(Y, X + 0.05, w=0.5, sigma2=1e-14)):
+        assert not fit.converged and fit.iterations == 1
+        assert np.all(fit.P1 == 0.0) and np.allclose(fit.transformed, Y, rtol=0.0, atol=1e-15)
+
+
 @pytest.mark.parametrize(
     "source,target,match",
     [
@@ -209,9 +227,9 @@ def test_float32_estep_within_its_stated_bound():
         ref = cpd.estep(Y, X, sigma2, 0.05)
         got = cpd.estep(Y, X, sigma2, 0.05, dtype=np.float32)
         ctr = X.mean(0)
-        bound = 8 * cpd._EPS32 * cpd.exponent_bound(Y - ctr, X - ctr, sigma2)
+        bound = 8 * cpd.EPS32 * cpd.exponent_bound(Y - ctr, X - ctr, sigma2)
         # kernel values within exp(bound) - 1, plus float32 sums of M terms
-        rel = 2.0 * bound + 2.0 * len(Y) * cpd._EPS32
+        rel = 2.0 * bound + 2.0 * len(Y) * cpd.EPS32
         assert np.abs(got.P1 - ref.P1).max() <= rel * ref.P1.max()
         assert np.abs(got.PX - ref.PX).max() <= rel * np.abs(ref.PX).max()
         assert np.abs(got.Pt1 - ref.Pt1).max() <= rel
