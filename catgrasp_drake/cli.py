@@ -185,7 +185,9 @@ def _cmd_train(args) -> int:
     how = (f"a robustness search per instance ({args.rounds} rounds x {args.population} candidates x "
            f"{args.perturbations} trials at most)" if args.search else f"{args.samples} sampled motions per instance")
     print(f"training {args.category} on {len(instances)} instances: {how}, seed {args.seed}")
-    model = train_category(args.category, instances, config, progress=_Progress())
+    if args.objects:
+        print(f"and {len(args.objects)} imported objects: {', '.join(str(d) for d in args.objects)}")
+    model = train_category(args.category, instances, config, objects=args.objects, progress=_Progress())
     out = Path(args.out or f"models/trained/{args.category}.npz")
     model.save(out)
     st = model.stats
@@ -392,7 +394,7 @@ def _cmd_film(args) -> int:
                                                if spec["model_sha256"] != record["model_sha256"] else ""))
         print(f"wrote {out}: {now} ({result.failure_reason or 'ok'}){same}")
         return 0
-    from catgrasp_drake.demo import imported_object
+    from catgrasp_drake.data.dataset import imported_object
     from catgrasp_drake.film import film_grasp, verdict_word
     from catgrasp_drake.station.handwritten import load_handwritten_motion, shifted_motion
     from catgrasp_drake.station.scenario import load_scenario, random_placement, with_instance
@@ -534,6 +536,8 @@ def build_parser() -> argparse.ArgumentParser:
     t.add_argument("--hold-out", type=_int_at_least(0), default=2,
                    help="leave the category's last N instances out of training (default 2: the demo's novel ones)")
     t.add_argument("--canonical", help="canonical instance (default: the first training instance)")
+    t.add_argument("--objects", nargs="+", metavar="DIR", default=(),
+                   help="imported objects (catgrasp import-object) of the category to train on as well")
     t.add_argument("--samples", type=_int_at_least(1, MAX_SAMPLES), default=12, help="sampled motions per instance")
     t.add_argument("--seed", type=_int_at_least(0, MAX_SEED), default=0)
     t.add_argument("--workers", type=_int_at_least(0, MAX_WORKERS), default=None,

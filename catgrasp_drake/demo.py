@@ -24,7 +24,7 @@ from PIL import Image
 from catgrasp_drake.category_model import CategoryModel
 from catgrasp_drake.core.fileio import atomic_write_bytes, atomic_write_text
 from catgrasp_drake.core.rotations import rotation_angle
-from catgrasp_drake.data.dataset import CATEGORIES, list_instances, models_dir, read_annotations
+from catgrasp_drake.data.dataset import CATEGORIES, imported_object, list_instances, models_dir
 from catgrasp_drake.errors import InputError, ModelFileError
 from catgrasp_drake.station.scenario import load_scenario, random_placement, with_instance
 from catgrasp_drake.transfer import make_transfer_diagram, run_transfer
@@ -61,20 +61,6 @@ def _snapshot_png(td, context, path: Path) -> None:
     buf = io.BytesIO()
     Image.fromarray(rgb_array(image)).save(buf, format="PNG")
     atomic_write_bytes(path, buf.getvalue())
-
-
-def imported_object(directory) -> tuple[str, str]:
-    """``(category, instance)`` of an imported object's directory (``catgrasp import-object``), checked."""
-    directory = Path(directory)
-    if not directory.is_dir():
-        raise ModelFileError(f"{directory}: no such object directory (write one with 'catgrasp import-object')")
-    ann = read_annotations(directory / "annotations.json")
-    category, instance = ann.get("category"), ann.get("instance")
-    if category not in CATEGORIES or not isinstance(instance, str):
-        raise ModelFileError(f"{directory}/annotations.json: no known category and instance name")
-    if not (directory / f"{instance}.sdf").is_file():
-        raise ModelFileError(f"{directory}: {instance}.sdf is missing")
-    return category, instance
 
 
 def run_demo(args) -> int:

@@ -42,6 +42,7 @@ from __future__ import annotations
 import dataclasses
 import time
 from dataclasses import asdict, dataclass
+from pathlib import Path
 from typing import Callable
 
 import numpy as np
@@ -50,7 +51,15 @@ from catgrasp_drake.category_model import CategoryModel
 from catgrasp_drake.core.deformation import inverse_warp_poses, warp_poses
 from catgrasp_drake.core.regression import REGRESSOR_GRID, fit_ridge, instance_means, select_regressor
 from catgrasp_drake.core.shape_space import build_shape_space
-from catgrasp_drake.data.dataset import instance_clouds, list_instances, load_annotations
+from catgrasp_drake.data.dataset import (
+    imported_object,
+    instance_clouds,
+    list_instances,
+    load_annotations,
+    read_annotations,
+)
+from catgrasp_drake.data.meshes import read_mesh
+from catgrasp_drake.data.pointclouds import full_cloud
 from catgrasp_drake.errors import InputError
 from catgrasp_drake.grasping.constraints import load_constraint
 from catgrasp_drake.grasping.descriptor import descriptor_vector, functional_point
@@ -122,23 +131,29 @@ class TrainingConfig:
         return kw
 
 
+def _task_scenario(spec: dict):
+    """The spec's scenario with its object: an embedded instance, or an imported one (``model_dir``)."""
+    base = load_scenario(spec["scenario"])
+    obj = dataclasses.replace(base.object, category=spec["category"], instance=spec["instance"])
+    if spec.get("model_dir") is not None:
+        obj = dataclasses.replace(obj, primitive=None, model_dir=spec["model_dir"])
+    return base.replace(name=f"{spec['scenario']}:{spec['instance']}", object=obj)
+
+
 def grasp_trial_task(spec: dict) -> dict:
     """Worker task: one grasp trial of ``spec["motion"]`` (object frame) on one instance."""
-    base = load_scenario(spec["scenario"])
-    scenario = base.replace(name=f"{spec['scenario']}:{spec['instance']}",
-                            object=dataclasses.replace(base.object, category=spec["category"],
-                                                       instance=spec["instance"]))
-    result = run_grasp_trial(scenario, GraspMotion.from_dict(spec["motion"]))
-    return result.to_dict()
+    return run_grasp_trial(_task_scenario(spec), GraspMotion.from_dict(spec["motion"])).to_dict()
 
 
 def robust_trial_task(spec: dict) -> dict:
     """Worker task: ``spec["motion"]`` (object frame) on one instance under ``spec["perturbation"]``."""
-    base = load_scenario(spec["scenario"])
-    scenario = base.replace(name=f"{spec['scenario']}:{spec['instance']}",
-                            object=dataclasses.replace(base.object, category=spec["category"],
-                                                       instance=spec["instance"]))
-    return run_perturbed_trial(scenario, GraspMotion.from_dict(spec["motion"]), spec["perturbation"])
+    return run_perturbed_trial(_task_scenario(spec), GraspMotion.from_dict(spec["motion"]), spec["perturbation"])
+
+
+def _object_key(name: str, object_dirs: dict) -> dict:
+    """A trial spec's object: the instance, and the folder of an imported one (embedded: no extra key,
+    so their cache keys are what they always were)."""
+    return {"instance": name} | ({"model_dir": object_dirs[name]} if name in object_dirs else {})
 
 
 @dataclass
@@ -214,7 +229,8 @@ def _plan_refused(r: dict) -> bool:
     return r.get("failure_reason", r.get("reason")) in ("unreachable", "collision_before_closing") and sim == 0
 
 
-def search_training_grasps(category, space, instances, template, config, annotations, tip_H, progress=None):
+def search_training_grasps(category, space, instances, template, config, annotations, tip_H, progress=None,
+                           object_dirs=None):
     """Training's per-instance grasp search (module docstring): ``(kept, stats, record)``.
 
     ``kept``: the best robust grasps of each instance (:class:`_Kept`); ``stats``: per instance
@@ -250,8 +266,9 @@ def search_training_grasps(category, space, instances, template, config, annotat
                     continue
                 motions[i, j] = m
                 for p in perts[i]:
-                    specs.append({"task": "robust_trial", "scenario": f"{category}_default", "category": category,
-                                  "instance": name, "motion": m.to_dict(), "perturbation": p})
+                    specs.append({"task": "robust_trial", "scenario": f"{category}_default", "category": category}
+                                 | _object_key(name, object_dirs or {})
+                                 | {"motion": m.to_dict(), "perturbation": p})
                     owners.append((i, j))
         outcomes = run_tasks(robust_trial_task, specs, cache_dir=config.cache_dir, code_version=trial_code_version(),
                              workers=config.workers, ray_address=config.ray,
@@ -320,11 +337,13 @@ def fit_grasp_regressor(X, Y, groups, weights, config: TrainingConfig, template:
                        "loo_error_mm_by_family": {n: round(1000 * f[2], 2) for n, f in families.items()}}
 
 
-def _sampled_training_grasps(category, space, instances, template, config, annotations, tip_H, progress):
+def _sampled_training_grasps(category, space, instances, template, config, annotations, tip_H, progress,
+                             object_dirs=None):
     """The paper's step 3: random samples around the warped motion, each one trial; its functional successes."""
     candidates, stats = sample_training_motions(category, space, instances, template, config, annotations, tip_H)
-    specs = [{"task": "grasp_trial", "scenario": f"{category}_default", "category": category,
-              "instance": instances[c.instance_index], "motion": c.motion.to_dict()} for c in candidates]
+    specs = [{"task": "grasp_trial", "scenario": f"{category}_default", "category": category}
+             | _object_key(instances[c.instance_index], object_dirs or {}) | {"motion": c.motion.to_dict()}
+             for c in candidates]
     outcomes = run_tasks(grasp_trial_task, specs, cache_dir=config.cache_dir, code_version=trial_code_version(),
                          workers=config.workers, ray_address=config.ray,
                          progress=(lambda o, d, t: progress("trials", d, t)) if progress else None)
@@ -351,16 +370,28 @@ def train_category(
     instances: list[str] | None = None,
     config: TrainingConfig = TrainingConfig(),
     *,
+    objects=(),
     progress: Callable[[str, int, int], None] | None = None,
 ) -> CategoryModel:
-    """Algorithm 1 on ``instances`` of ``category`` (default: all embedded ones).
+    """Algorithm 1 on ``instances`` of ``category`` (default: all embedded ones) and ``objects``.
 
-    ``progress(stage, done, total)`` reports "shape" (CPD registrations) and
-    "trials" progress. Raises InputError when no instance gets a functional
+    ``objects``: directories of imported objects (``catgrasp import-object``) of the same category,
+    trained on like embedded instances, after them (their annotated functional region is what the
+    constraint and the judge use). ``progress(stage, done, total)`` reports "shape" (CPD
+    registrations) and "trials" progress. Raises InputError when no instance gets a functional
     success (nothing to learn from).
     """
     t0 = time.perf_counter()
     instances = list(instances) if instances is not None else list_instances(category)
+    object_dirs = {}
+    for directory in objects:
+        obj_category, name = imported_object(directory)
+        if obj_category != category:
+            raise InputError(f"{directory}: is a {obj_category} object, not {category}")
+        if name in instances or name in object_dirs:
+            raise InputError(f"{directory}: an instance named {name!r} is already in the training set")
+        object_dirs[name] = str(directory)
+    instances += list(object_dirs)
     if len(instances) < 2:
         raise InputError(f"training needs at least 2 instances, got {len(instances)}")
     canonical = config.canonical_instance or instances[0]
@@ -368,22 +399,24 @@ def train_category(
         raise InputError(f"canonical instance {canonical!r} is not among the training instances")
     c_index = instances.index(canonical)
 
-    clouds = instance_clouds(category, instances, config.cloud_voxel)
+    clouds = [full_cloud(read_mesh(Path(object_dirs[n]) / f"{n}.obj"), voxel=config.cloud_voxel) if n in object_dirs
+              else instance_clouds(category, [n], config.cloud_voxel)[0] for n in instances]
     space = build_shape_space(clouds, canonical_index=c_index, progress=(
         (lambda d, t: progress("shape", d, t)) if progress else None), **config.shape_kwargs())
     t_shape = time.perf_counter() - t0
 
-    template = load_handwritten_motion(category, canonical)
-    annotations = {n: load_annotations(category, n) for n in instances}
+    template = load_handwritten_motion(category, canonical, annotations_dir=object_dirs.get(canonical))
+    annotations = {n: read_annotations(Path(object_dirs[n]) / "annotations.json") if n in object_dirs
+                   else load_annotations(category, n) for n in instances}
     tip_H = functional_point_in_hand(template, annotations[canonical], load_constraint(category).region)
     t1 = time.perf_counter()
     if config.search is None:
         kept, stats = _sampled_training_grasps(category, space, instances, template, config, annotations, tip_H,
-                                               progress)
+                                               progress, object_dirs)
         search_record = None
     else:
         kept, stats, search_record = search_training_grasps(category, space, instances, template, config,
-                                                            annotations, tip_H, progress)
+                                                            annotations, tip_H, progress, object_dirs)
     t_trials = time.perf_counter() - t1
     if not kept:
         raise InputError(f"{category}: no sampled grasp succeeded functionally on any training instance; "
@@ -420,6 +453,8 @@ def train_category(
     params = {k: (asdict(v) if hasattr(v, "__dataclass_fields__") else v) for k, v in asdict(config).items()}
     for run_only in ("cache_dir", "workers", "ray"):
         params.pop(run_only, None)
+    if object_dirs:
+        params["objects"] = object_dirs
     return CategoryModel(category=category, space=space, regressor=regressor, template=template,
                          instances=tuple(instances), canonical_instance=canonical, params=params, stats=summary,
                          grasp_anchor_H=tuple(float(v) for v in tip_H),

@@ -160,7 +160,7 @@ def split_objects(config: BenchmarkConfig) -> list[BenchmarkObject]:
                 name = instance_name(category, i)
                 out.append(BenchmarkObject(config.split, category, name, str(root / category / name)))
     elif config.split == "objects":
-        from catgrasp_drake.demo import imported_object
+        from catgrasp_drake.data.dataset import imported_object
 
         seen = {}
         for directory in config.objects:

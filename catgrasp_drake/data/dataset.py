@@ -111,6 +111,21 @@ def instance_clouds(category: str, instances, voxel: float = 0.01) -> list:
     return [full_cloud(load_mesh(category, n), voxel=voxel) for n in instances]
 
 
+def imported_object(directory) -> tuple[str, str]:
+    """``(category, instance)`` of an imported object's directory (``catgrasp import-object``: ``<instance>.sdf``,
+    ``<instance>.obj`` and ``annotations.json``), checked; ModelFileError naming what is missing."""
+    directory = Path(directory)
+    if not directory.is_dir():
+        raise ModelFileError(f"{directory}: no such object directory (write one with 'catgrasp import-object')")
+    ann = read_annotations(directory / "annotations.json")
+    category, instance = ann.get("category"), ann.get("instance")
+    if category not in CATEGORIES or not isinstance(instance, str):
+        raise ModelFileError(f"{directory}/annotations.json: no known category and instance name")
+    if not (directory / f"{instance}.sdf").is_file():
+        raise ModelFileError(f"{directory}: {instance}.sdf is missing")
+    return category, instance
+
+
 def load_mesh(category: str, instance: str) -> trimesh.Trimesh:
     """The instance's watertight mesh (canonical frame, metres)."""
     return read_mesh(instance_mesh_path(category, instance))

@@ -387,3 +387,34 @@ def test_demo_runs_on_an_imported_object(imported_dir, tmp_path, capsys):
     assert "my_drill (imported from" in out and "judge" in out
     record = json.loads((tmp_path / "result.json").read_text())
     assert ":my_drill@" in record["scenario"] and record["plan_status"] == "ok"
+
+
+@pytest.mark.slow
+def test_an_imported_object_is_trained_on_like_an_embedded_instance(imported_dir, tmp_path, capsys):
+    from catgrasp_drake.category_model import CategoryModel
+    from catgrasp_drake.training import TrainingConfig, train_category
+
+    directory, _ = imported_dir
+    config = TrainingConfig(samples_per_instance=2, workers=2, cache_dir=str(tmp_path / "cache"))
+    model = train_category("drill", ["drill_00", "drill_05"], config, objects=[directory])
+    assert model.instances == ("drill_00", "drill_05", "my_drill")
+    assert model.params["objects"] == {"my_drill": str(directory)}
+    mine = model.stats["per_instance"]["my_drill"]
+    assert mine["sampled"] == 2 and mine["errors"] == 0  # its trials ran on the imported object's own files
+    assert mine["simulated"] + mine["rejected_plan"] + mine["rejected_constraint"] == 2
+    # the imported drill is a shape of the space: its latent vector reconstructs it like the others'
+    assert model.space.latent_train.shape[0] == 3
+    path = tmp_path / "drill.npz"
+    model.save(path)
+    assert CategoryModel.load(path).instances == model.instances
+    mug_dir = tmp_path / "not_a_drill"
+    mug_dir.mkdir()
+    (mug_dir / "annotations.json").write_text((directory / "annotations.json").read_text().replace(
+        '"category": "drill"', '"category": "mug"'))
+    (mug_dir / "my_drill.sdf").write_text((directory / "my_drill.sdf").read_text())
+    for argv, what in [(["train", "drill", "--objects", tmp_path / "none"], "no such object directory"),
+                       (["train", "drill", "--objects", mug_dir], "is a mug object, not drill"),
+                       (["train", "drill", "--objects", directory, directory], "already in the training set")]:
+        code, _, err = _cli(argv, capsys)
+        lines = [ln for ln in err.splitlines() if ln.strip()]
+        assert code != 0 and len(lines) == 1 and what in lines[0], (argv, err)
