@@ -221,7 +221,10 @@ class CategoryModel:
         try:
             space = ShapeSpace.from_arrays({k[6:]: v for k, v in arrays.items() if k.startswith("shape/")},
                                            meta["shape"], source=str(path))
-            reg_meta = meta.get("regressor") or {"kind": "ridge", "alpha": meta["regressor_alpha"]}
+            alpha = float(meta["regressor_alpha"])  # written by every version; the kind's own header wins
+            if not (np.isfinite(alpha) and alpha >= 0):
+                raise ModelFileError(f"{path}: the grasp regressor's alpha is not a finite number >= 0")
+            reg_meta = meta.get("regressor") or {"kind": "ridge", "alpha": alpha}
             try:
                 regressor = regressor_from_arrays(
                     {k[len("regressor/"):]: v for k, v in arrays.items() if k.startswith("regressor/")}, reg_meta)

@@ -274,6 +274,8 @@ def _forge_model(raw: bytes, how: str, rng) -> bytes:
             arrays["training/groups"] = arrays["training/groups"][:-1]
     elif how == "alpha_nan":
         meta["regressor_alpha"] = "NaN"
+        if isinstance(meta.get("regressor"), dict) and "alpha" in meta["regressor"]:
+            meta["regressor"]["alpha"] = "NaN"
     header["sha256"] = _arrays_checksum(arrays)
     return npz_with_header(arrays, header)
 
