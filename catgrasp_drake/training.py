@@ -150,7 +150,7 @@ def robust_trial_task(spec: dict) -> dict:
     return run_perturbed_trial(_task_scenario(spec), GraspMotion.from_dict(spec["motion"]), spec["perturbation"])
 
 
-def _object_key(name: str, object_dirs: dict) -> dict:
+def _object_key(name: str, object_dirs) -> dict:
     """A trial spec's object: the instance, and the folder of an imported one (embedded: no extra key,
     so their cache keys are what they always were)."""
     return {"instance": name} | ({"model_dir": object_dirs[name]} if name in object_dirs else {})
@@ -188,6 +188,29 @@ def functional_point_in_hand(template: GraspMotion, annotations: dict, region: s
     return X[:3, :3].T @ (np.asarray(regions[region]["center"], float) - X[:3, 3])
 
 
+def warped_start(space, i: int, template: GraspMotion, tip_H, config) -> tuple[np.ndarray, np.ndarray]:
+    """The canonical motion's control poses warped onto training instance ``i`` (instance frame) and the
+    grasp's functional point on it (m): where sampling and the search start, and what they turn about."""
+    ref = warp_poses(space.canonical, space.W_train[i], space.beta, template.poses, anchor=tip_H,
+                     rotation_radius=config.grasp_rotation_radius)
+    k = template.pose_names.index("grasp")
+    return ref, ref[k, :3, :3] @ tip_H + ref[k, :3, 3]
+
+
+def _tally(st: InstanceStats, *, error: bool, reason, sim_s: float, grasp: bool, functional: bool) -> bool:
+    """Count one trial outcome in ``st``; True if it was simulated (not an error, not a refused plan)."""
+    if error:
+        st.errors += 1
+    elif reason in ("unreachable", "collision_before_closing") and sim_s == 0:
+        st.rejected_plan += 1
+    else:
+        st.simulated += 1
+        st.grasped += bool(grasp)
+        st.functional += bool(functional)
+        return True
+    return False
+
+
 def sample_training_motions(category, space, instances, template, config, annotations, tip_H):
     """Warped + perturbed motions per instance, filtered by the functional constraint."""
     constraint = load_constraint(category)
@@ -195,9 +218,7 @@ def sample_training_motions(category, space, instances, template, config, annota
     candidates: list[_Candidate] = []
     grasp_k = template.pose_names.index("grasp")
     for i, name in enumerate(instances):
-        ref = warp_poses(space.canonical, space.W_train[i], space.beta, template.poses, anchor=tip_H,
-                         rotation_radius=config.grasp_rotation_radius)
-        centre = ref[grasp_k, :3, :3] @ tip_H + ref[grasp_k, :3, 3]  # perturb about the grasp centre
+        ref, centre = warped_start(space, i, template, tip_H, config)  # perturbed about the grasp centre
         rng = np.random.default_rng([config.seed, i])
         T = perturbations(rng, config.samples_per_instance, config.sampling)
         T[0] = np.eye(4)  # sample 0: the warped canonical motion itself
@@ -224,13 +245,8 @@ class _Kept:
     weight: float
 
 
-def _plan_refused(r: dict) -> bool:
-    sim = r.get("sim_time_s", r.get("sim_s", 0))
-    return r.get("failure_reason", r.get("reason")) in ("unreachable", "collision_before_closing") and sim == 0
-
-
 def search_training_grasps(category, space, instances, template, config, annotations, tip_H, progress=None,
-                           object_dirs=None):
+                           object_dirs=()):
     """Training's per-instance grasp search (module docstring): ``(kept, stats, record)``.
 
     ``kept``: the best robust grasps of each instance (:class:`_Kept`); ``stats``: per instance
@@ -242,17 +258,17 @@ def search_training_grasps(category, space, instances, template, config, annotat
     grasp_k = template.pose_names.index("grasp")
     stats = {name: InstanceStats() for name in instances}
     refs, pivots, searches, perts = [], [], [], []
+    version = trial_code_version()
     for i, name in enumerate(instances):
-        ref = warp_poses(space.canonical, space.W_train[i], space.beta, template.poses, anchor=tip_H,
-                         rotation_radius=config.grasp_rotation_radius)
+        ref, pivot = warped_start(space, i, template, tip_H, config)
         refs.append(GraspMotion(ref, template.pose_names, dict(template.postures), "object", template.lift_height,
                                 template.hold_time))
-        pivots.append(ref[grasp_k, :3, :3] @ tip_H + ref[grasp_k, :3, 3])
+        pivots.append(pivot)
         seed = int(np.random.SeedSequence([config.seed, i]).generate_state(1)[0])
         searches.append(CemSearch(np.zeros(len(VARIATION_SCALE)), search.spread * VARIATION_SCALE,
                                   params=dataclasses.replace(search.cem, seed=seed)))
         perts.append([perturbation(search.robustness, name, k) for k in range(search.robustness.perturbations)])
-    evaluated: list[list[tuple[float, int, np.ndarray, GraspMotion]]] = [[] for _ in instances]
+    evaluated: list[list[tuple[float, GraspMotion]]] = [[] for _ in instances]  # candidates with a functional trial
     for rnd in range(search.cem.rounds):
         X = [sr.ask() for sr in searches]
         motions, specs, owners = {}, [], []
@@ -265,26 +281,19 @@ def search_training_grasps(category, space, instances, template, config, annotat
                     stats[name].rejected_constraint += 1
                     continue
                 motions[i, j] = m
+                spec = ({"task": "robust_trial", "scenario": f"{category}_default", "category": category}
+                        | _object_key(name, object_dirs) | {"motion": m.to_dict()})
                 for p in perts[i]:
-                    specs.append({"task": "robust_trial", "scenario": f"{category}_default", "category": category}
-                                 | _object_key(name, object_dirs or {})
-                                 | {"motion": m.to_dict(), "perturbation": p})
+                    specs.append(spec | {"perturbation": p})
                     owners.append((i, j))
-        outcomes = run_tasks(robust_trial_task, specs, cache_dir=config.cache_dir, code_version=trial_code_version(),
+        outcomes = run_tasks(robust_trial_task, specs, cache_dir=config.cache_dir, code_version=version,
                              workers=config.workers, ray_address=config.ray,
                              progress=(lambda o, d, t: progress("trials", d, t)) if progress else None)
         trials: dict[tuple[int, int], list[dict]] = {}
         for key, out in zip(owners, outcomes):
             r = out.result
-            st = stats[instances[key[0]]]
-            if r.get("status") == "error":
-                st.errors += 1
-            elif _plan_refused(r):
-                st.rejected_plan += 1
-            else:
-                st.simulated += 1
-                st.grasped += bool(r.get("grasp"))
-                st.functional += bool(r.get("functional"))
+            _tally(stats[instances[key[0]]], error=r.get("status") == "error", reason=r.get("reason"),
+                   sim_s=r.get("sim_s", 0), grasp=r.get("grasp"), functional=r.get("functional"))
             trials.setdefault(key, []).append(r)
         w = search.robustness.grasp_weight
         for i, sr in enumerate(searches):
@@ -294,14 +303,14 @@ def search_training_grasps(category, space, instances, template, config, annotat
                 if ts:
                     scores[j] = float(np.mean([trial_score(t, w) for t in ts]))
                     if any(t.get("functional") for t in ts):
-                        evaluated[i].append((scores[j], len(evaluated[i]), X[i][j], motions[i, j]))
+                        evaluated[i].append((scores[j], motions[i, j]))
             sr.tell(scores)
         if progress:
             progress("search", rnd + 1, search.cem.rounds)
     kept, record = [], {}
     for i, name in enumerate(instances):
-        best = sorted(evaluated[i], key=lambda e: (-e[0], e[1]))[:search.keep]
-        kept += [_Kept(i, m, float(score)) for score, _, _, m in best]
+        best = sorted(evaluated[i], key=lambda e: -e[0])[:search.keep]  # stable: the earlier of equal scores
+        kept += [_Kept(i, m, float(score)) for score, m in best]
         res = searches[i].result
         record[name] = {"start_score": round(float(res.scores[0][0]), 4), "best_score": round(res.best_score, 4),
                         "best_variation": variation_dict(res.best), "kept": [round(float(b[0]), 4) for b in best]}
@@ -338,29 +347,22 @@ def fit_grasp_regressor(X, Y, groups, weights, config: TrainingConfig, template:
 
 
 def _sampled_training_grasps(category, space, instances, template, config, annotations, tip_H, progress,
-                             object_dirs=None):
+                             object_dirs=()):
     """The paper's step 3: random samples around the warped motion, each one trial; its functional successes."""
     candidates, stats = sample_training_motions(category, space, instances, template, config, annotations, tip_H)
     specs = [{"task": "grasp_trial", "scenario": f"{category}_default", "category": category}
-             | _object_key(instances[c.instance_index], object_dirs or {}) | {"motion": c.motion.to_dict()}
+             | _object_key(instances[c.instance_index], object_dirs) | {"motion": c.motion.to_dict()}
              for c in candidates]
     outcomes = run_tasks(grasp_trial_task, specs, cache_dir=config.cache_dir, code_version=trial_code_version(),
                          workers=config.workers, ray_address=config.ray,
                          progress=(lambda o, d, t: progress("trials", d, t)) if progress else None)
     kept = []
     for cand, out in zip(candidates, outcomes):
-        st = stats[instances[cand.instance_index]]
         r = out.result
-        if r.get("status") == "error":
-            st.errors += 1
-            continue
-        if _plan_refused(r):
-            st.rejected_plan += 1
-            continue
-        st.simulated += 1
-        st.grasped += bool(r.get("grasp_success"))
-        if r.get("functional_success"):
-            st.functional += 1
+        simulated = _tally(stats[instances[cand.instance_index]], error=r.get("status") == "error",
+                           reason=r.get("failure_reason"), sim_s=r.get("sim_time_s", 0),
+                           grasp=r.get("grasp_success"), functional=r.get("functional_success"))
+        if simulated and r.get("functional_success"):
             kept.append(_Kept(cand.instance_index, cand.motion, 1.0))
     return kept, stats
 

@@ -232,7 +232,7 @@ def regressor_from_arrays(arrays: dict, meta: dict) -> Regressor:
         raise InputError(f"regressor ({kind}): missing or malformed entry {e}") from None
     if not all(np.all(np.isfinite(v)) for v in (*a.values(), *scalars.values())):
         raise InputError(f"regressor ({kind}): arrays or parameters are not finite")
-    first, *rest = a.values()
+    first = next(iter(a.values()))
     rows_ok = {"ridge": lambda: first.ndim == 2 and a["intercept"].shape == first.shape[:1],
                "kernel_ridge": lambda: (first.ndim == 2 and a["dual"].ndim == 2 and len(a["dual"]) == len(first)
                                         and a["intercept"].shape == a["dual"].shape[1:]),

@@ -124,11 +124,17 @@ def shifted_motion(motion: GraspMotion, category: str, instance: str, shift_O, r
                    annotations_dir: str | Path | None = None) -> GraspMotion:
     """``motion`` (object frame) turned by x-y-z Euler angles ``rotate_deg`` (deg) about the centre of the
     category's functional region on ``instance`` (the trigger or handle), then moved by ``shift_O`` (m, O)."""
+    region = load_constraint(category).region
+    pivot = _annotations(category, instance, annotations_dir)["regions"][region]["center"]
+    return moved_about(motion, pivot, shift_O, rotate_deg)
+
+
+def moved_about(motion: GraspMotion, pivot_O, shift_O, rotate_deg=(0.0, 0.0, 0.0)) -> GraspMotion:
+    """``motion`` (object frame) turned by x-y-z Euler angles ``rotate_deg`` (deg) about ``pivot_O`` (m, O),
+    then moved by ``shift_O`` (m, O)."""
     from scipy.spatial.transform import Rotation
 
-    region = load_constraint(category).region
-    pivot = np.asarray(_annotations(category, instance, annotations_dir)["regions"][region]["center"], float)
     T = np.eye(4)
     T[:3, :3] = Rotation.from_euler("xyz", rotate_deg, degrees=True).as_matrix()
     T[:3, 3] = np.asarray(shift_O, float)
-    return replace(motion, poses=perturb_poses(motion.poses, T, pivot))
+    return replace(motion, poses=perturb_poses(motion.poses, T, np.asarray(pivot_O, float)))

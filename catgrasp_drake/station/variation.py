@@ -22,13 +22,11 @@ from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from catgrasp_drake.errors import InputError
 from catgrasp_drake.grasping.motion import GraspMotion
-from catgrasp_drake.grasping.sampling import perturb_poses
 from catgrasp_drake.robot.models import HAND_ACTUATED_JOINTS, hand_joint_limits
-from catgrasp_drake.station.handwritten import shifted_motion
+from catgrasp_drake.station.handwritten import moved_about, shifted_motion
 
 #: (name, scale, joints of HAND_ACTUATED_JOINTS it moves (postures only)).
 VARIATION: tuple[tuple[str, float, tuple[str, ...]], ...] = (
@@ -99,10 +97,7 @@ def vary_motion_about(motion: GraspMotion, pivot_O, v) -> GraspMotion:
     instead of an annotated region's centre -- e.g. about the warped functional point of a grasp
     transferred onto an instance (``catgrasp_drake.training``)."""
     v = _check(v)
-    T = np.eye(4)
-    T[:3, :3] = Rotation.from_euler("xyz", v[3:6], degrees=True).as_matrix()
-    T[:3, 3] = v[:3]
-    return _varied_closing(replace(motion, poses=perturb_poses(motion.poses, T, np.asarray(pivot_O, float))), v)
+    return _varied_closing(moved_about(motion, pivot_O, v[:3], v[3:6]), v)
 
 
 def _varied_closing(motion: GraspMotion, v: np.ndarray) -> GraspMotion:

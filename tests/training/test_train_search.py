@@ -71,7 +71,9 @@ def test_a_small_search_keeps_scored_grasps_and_the_model_file_carries_them(tmp_
     assert st["trials_functional"] >= 1  # the warped canonical grasp works on these drills
     weights = np.concatenate([st["search"][n]["kept"] for n in instances])
     np.testing.assert_allclose(np.sort(model.training_weights), np.sort(weights), atol=1e-4)
-    assert st["regression"]["regressor"] in ("mean", "nearest", "ridge", "kernel_ridge")
+    sel = st["regression"]  # the chosen family is the one with the least leave-one-instance-out error
+    assert sel["loo_error_mm"] == min(sel["loo_error_mm_by_family"].values())
+    assert sel["loo_error_mm_by_family"][sel["regressor"]] == sel["loo_error_mm"]
     path = tmp_path / "drill.npz"
     model.save(path)
     loaded = CategoryModel.load(path)
