@@ -18,8 +18,22 @@ grasping motion in W. They differ in the estimator they are paired with
                  offsets from it (no latent space; see :func:`predict_motion`).
 ``nearest``      the latent fit, then the mean grasp of the training instance
                  whose latent vector is closest, warped by W(x) (no regression).
+``latent_map``   ``latent`` with one shape hypothesis (the yaw search's best start
+                 only; the project's method before the shape posterior): an ablation
+                 row that measures what the posterior choice changes.
 ``true_object``  ``latent``'s grasp, planned around the TRUE object instead of the
                  perceived shape: an ablation row, not a method a robot can run.
+
+Shape posterior (``latent``): the estimator refines the ``hypotheses`` best
+starts of its yaw search (:func:`catgrasp_drake.core.inference.infer_latent_pose`)
+and keeps the distinct fits. :func:`grasp_candidates` predicts a grasp for each,
+weights each hypothesis by its tempered likelihood ``exp(-(E - E_min) / T)``
+(:data:`POSTERIOR_TEMPERATURE`), and ranks the grasps by their *support*: the
+posterior mass of the hypotheses on which the grasp's functional point lands
+within :data:`SUPPORT_RADIUS_M` of theirs. The planner executes the first
+candidate it can plan without collision (``MotionPlanner``'s
+``grasp_candidates_W``), so a grasp refused on the most likely shape falls back
+to the next plausible one instead of no motion.
 
 Pose warping uses the model's functional-point anchor and rotation radius
 throughout. Frames: W world, O canonical object frame; metres.
@@ -39,7 +53,7 @@ from catgrasp_drake.errors import InputError
 from catgrasp_drake.grasping.descriptor import motion_from_descriptor
 from catgrasp_drake.grasping.motion import GraspMotion
 
-METHODS = ("latent", "paper", "rigid", "cpd", "nearest", "true_object")
+METHODS = ("latent", "paper", "rigid", "cpd", "nearest", "true_object", "latent_map")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -48,16 +62,32 @@ class EstimatorSetup:
 
     rigid: bool = False
     visibility: bool = True
+    #: Shape hypotheses the estimator keeps (``infer_latent_pose(hypotheses=...)``); 1: the MAP fit only.
+    hypotheses: int = 1
+
+
+#: Shape hypotheses of the latent method. On the committed mugs (45 single views, 3 seeded placements
+#: each; out-of-split tuning), the yaw within 10 deg: 24 (1 hypothesis), 24 (2), 26 (3), 26 (4);
+#: each more costs one refine (~35 ms).
+POSTERIOR_HYPOTHESES = 3
+#: Temperature (nats) of the hypotheses' weights ``exp(-(E - E_min) / T)``: the likelihood of the right
+#: hypothesis (yaw within 10 deg) is largest at 12-20 on the same tuning set (1: -3.3, 5: -0.88,
+#: 15: -0.49, 40: -0.78 mean log-probability); the EM energy's raw likelihood (T = 1) is far too sure.
+POSTERIOR_TEMPERATURE = 15.0
+#: A grasp is well placed on a hypothesis when its functional point is within this of that
+#: hypothesis' grasp's functional point (m): about the trigger's and handle's half-width.
+SUPPORT_RADIUS_M = 0.01
 
 
 #: The estimator each method is paired with.
 ESTIMATORS = {
-    "latent": EstimatorSetup(),
+    "latent": EstimatorSetup(hypotheses=POSTERIOR_HYPOTHESES),
     "paper": EstimatorSetup(visibility=False),
     "rigid": EstimatorSetup(rigid=True),
     "cpd": EstimatorSetup(rigid=True),
     "nearest": EstimatorSetup(),
-    "true_object": EstimatorSetup(),
+    "true_object": EstimatorSetup(hypotheses=POSTERIOR_HYPOTHESES),
+    "latent_map": EstimatorSetup(),
 }
 
 #: Direct CPD's settings (outlier weight, iterations, tolerance).
@@ -113,7 +143,7 @@ def _predict_motion(method, model, x, X_WO, scale, observed_W, completed_W):
     X_WO = np.asarray(X_WO, float)
     s = float(scale)
     template = model.template
-    if method in ("latent", "paper", "true_object"):
+    if method in ("latent", "paper", "true_object", "latent_map"):
         return model.transfer(x, X_WO[:3, :3], X_WO[:3, 3], s, frame="world"), ""
     if method == "rigid":
         return _motion(_placed(model, template.poses, X_WO, s), template), ""
@@ -139,3 +169,74 @@ def _predict_motion(method, model, x, X_WO, scale, observed_W, completed_W):
     warped = warp_poses(model.space.canonical, model.space.decode(x), model.space.beta, canonical.poses,
                         **model.warp_options())
     return _motion(_placed(model, warped, X_WO, s), canonical), f"nearest training instance: {model.instances[k]}"
+
+
+# ----------------------------------------------------------------------------- the shape posterior
+@dataclasses.dataclass(frozen=True, eq=False)
+class ShapeHypothesis:
+    """One fit of the shape posterior, in W: latent ``x`` (q,), pose ``X_WO`` 4x4, ``scale``, the completed
+    shape ``completed_W`` (M, 3) m, and its fit ``energy`` (nats)."""
+
+    x: np.ndarray
+    X_WO: np.ndarray
+    scale: float
+    completed_W: np.ndarray
+    energy: float
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class GraspCandidate:
+    """A grasp predicted for one shape hypothesis, with what the posterior says of it.
+
+    ``motion`` in W; ``object_points_W`` (M, 3) the completed shape it was
+    predicted for (the planner's obstacle for it); ``hypothesis`` its index
+    in energy order (0 = the MAP fit); ``weight`` that hypothesis' posterior
+    weight; ``support`` the posterior mass of the hypotheses on which its
+    functional point is within :data:`SUPPORT_RADIUS_M` of theirs (its own
+    included); ``functional_point_W`` (3,) m.
+    """
+
+    motion: GraspMotion
+    object_points_W: np.ndarray
+    hypothesis: int
+    weight: float
+    support: float
+    functional_point_W: np.ndarray
+
+
+def hypothesis_weights(energies, temperature: float = POSTERIOR_TEMPERATURE) -> np.ndarray:
+    """Normalised weights ``exp(-(E_i - min E) / temperature)`` of fits with energies ``E`` (nats)."""
+    E = np.asarray(energies, float).reshape(-1)
+    if E.size == 0 or not np.all(np.isfinite(E)):
+        raise InputError(f"energies: expected finite values, got {E.tolist()}")
+    if not float(temperature) > 0:
+        raise InputError(f"temperature: expected > 0 nats, got {temperature!r}")
+    w = np.exp(-(E - E.min()) / float(temperature))
+    return w / w.sum()
+
+
+def functional_point_W(motion: GraspMotion, anchor_H) -> np.ndarray:
+    """The grasp's functional point in W: ``anchor_H`` (3,) m (None: the origin) through the grasp pose."""
+    X = np.asarray(motion.poses[motion.pose_names.index("grasp")], float)
+    a = np.zeros(3) if anchor_H is None else np.asarray(anchor_H, float)
+    return X[:3, :3] @ a + X[:3, 3]
+
+
+def grasp_candidates(method: str, model: CategoryModel, hypotheses, *, temperature: float = POSTERIOR_TEMPERATURE,
+                     radius: float = SUPPORT_RADIUS_M) -> list[GraspCandidate]:
+    """``method``'s grasp for each :class:`ShapeHypothesis` (energy order), ranked by support (module docstring).
+
+    Ties in support keep the energy order, so with one hypothesis, or
+    hypotheses whose grasps all land apart, the MAP fit's grasp comes first.
+    """
+    hypotheses = list(hypotheses)
+    if not hypotheses:
+        raise InputError("hypotheses: expected at least one shape hypothesis")
+    w = hypothesis_weights([h.energy for h in hypotheses], temperature)
+    motions = [predict_motion(method, model, h.x, h.X_WO, h.scale)[0] for h in hypotheses]
+    f = np.array([functional_point_W(m, model.grasp_anchor_H) for m in motions])
+    near = np.linalg.norm(f[:, None] - f[None], axis=2) <= float(radius)
+    support = near.astype(float) @ w
+    out = [GraspCandidate(m, np.asarray(h.completed_W, float), i, float(w[i]), float(support[i]), f[i])
+           for i, (m, h) in enumerate(zip(motions, hypotheses))]
+    return sorted(out, key=lambda c: -c.support)  # stable: ties keep the energy order

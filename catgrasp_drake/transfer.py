@@ -224,6 +224,8 @@ def make_transfer_diagram(scenario: Scenario, model: CategoryModel, meshcat: Mes
     builder = DiagramBuilder()
     h = add_station(builder, scenario, meshcat)
     space = rigid_space(model.space) if setup.rigid else model.space
+    if setup.hypotheses > 1:
+        inference_kwargs = {"hypotheses": setup.hypotheses} | inference_kwargs
     estimator = builder.AddNamedSystem("shape_estimator", LatentShapeEstimator(
         space, scenario.table.pose.matrix(), yaw_candidates=yaw_candidates, **inference_kwargs))
     if view == "single":
@@ -260,6 +262,9 @@ def make_transfer_diagram(scenario: Scenario, model: CategoryModel, meshcat: Mes
             params=params, min_confidence=min_confidence))
         builder.Connect(estimator.GetOutputPort("completed_cloud_W"), generator.GetInputPort("object_cloud_W"))
     builder.Connect(regressor.GetOutputPort("grasp_motion_W"), generator.GetInputPort("grasp_motion_W"))
+    if setup.hypotheses > 1:  # a grasp per shape hypothesis, ranked; the planner executes the first feasible
+        builder.Connect(estimator.GetOutputPort("estimate"), regressor.GetInputPort("estimate"))
+        builder.Connect(regressor.GetOutputPort("grasp_candidates_W"), generator.GetInputPort("grasp_candidates_W"))
     builder.Connect(estimator.GetOutputPort("confidence"), generator.GetInputPort("confidence"))
     builder.Connect(generator.GetOutputPort("arm_desired_state"), h.plant.get_desired_state_input_port(h.arm))
     builder.Connect(generator.GetOutputPort("hand_desired_state"), h.plant.get_desired_state_input_port(h.hand))
@@ -297,6 +302,11 @@ class TransferResult:
     #: What the judge measured (NaN where not measured): the force along the trigger's travel (N),
     #: the object's largest shift (m) and turn (deg) in the hand after the start of the hold.
     judge: dict = field(default_factory=dict)
+    #: The shape posterior's part: ``hypotheses`` (distinct fits; 1 without a posterior), ``search_rank``
+    #: (the MAP fit's start in the yaw search's energy order; 0 = the search's best, as without one), ``candidate``
+    #: (rank of the executed grasp among the candidates; 0 = the first choice), ``tried`` (candidates
+    #: planned), ``hypothesis`` (the executed grasp's fit in energy order; 0 = the MAP fit), ``support``.
+    posterior: dict = field(default_factory=dict)
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -331,6 +341,13 @@ def run_transfer(td: TransferDiagram, *, record_html=None, return_context: bool 
     t0 = time.perf_counter()
     plan = td.generator.GetOutputPort("plan").Eval(td.generator.GetMyContextFromRoot(context))
     timings["plan"] = time.perf_counter() - t0
+    candidates = td.regressor.GetOutputPort("grasp_candidates_W").Eval(td.regressor.GetMyContextFromRoot(context))
+    chosen = candidates[plan.candidate] if plan.candidate < len(candidates) else candidates[0]
+    motion = chosen.motion if len(candidates) > 1 else motion
+    search_rank = estimate.result.diagnostics.get("search_rank", 0) if estimate.result is not None else 0
+    posterior = {"hypotheses": max(1, len(estimate.hypotheses)), "search_rank": int(search_rank),
+                 "candidate": int(plan.candidate),
+                 "tried": int(plan.tried), "hypothesis": int(chosen.hypothesis), "support": float(chosen.support)}
     if td.meshcat is not None:
         draw_transfer(td.meshcat, observed, estimate, motion, plan, td.generator.planning_model)
     spec = judge_spec(h, motion.lift_height)
@@ -338,7 +355,7 @@ def run_transfer(td: TransferDiagram, *, record_html=None, return_context: bool 
     base = dict(category=td.model.category, instance=h.scenario.object.instance, view=td.view,
                 plan_status=plan.status, confidence=float(estimate.confidence), scale=float(estimate.scale),
                 X_WO_estimated=pose_tuple(estimate.X_WO), X_WO_true=pose_tuple(X_true),
-                num_observed_points=int(len(observed)))
+                num_observed_points=int(len(observed)), posterior=posterior)
     if not plan.ok:
         timings["total"] = time.perf_counter() - t_all
         result = TransferResult(grasp_success=False, functional_success=False, failure_reason=plan.failure_reason,

@@ -51,7 +51,7 @@ TEST_SEED = 7919
 SPLITS = ("test", "ycb", "smoke", "objects")
 #: The YCB scans of each category that have the category's functional part.
 YCB_BY_CATEGORY = {"drill": ("ycb_035",), "spray_bottle": ("ycb_022",), "mug": ("ycb_025",)}
-BENCHMARK_METHODS = ("latent", "paper", "nearest", "rigid", "cpd")
+BENCHMARK_METHODS = ("latent", "latent_map", "paper", "nearest", "rigid", "cpd")
 #: Physics settings: the default, and the sensitivity ablations (run on a subset).
 PHYSICS = ("default", "time_step_1e-3", "effort_1.0x", "friction_0.5")
 #: The station's hand is ~1.7x as strong as the real SVH (models/svh/README.md): "effort_1.0x" undoes it.
@@ -316,6 +316,7 @@ def benchmark_trial_task(spec: dict) -> dict:
                                                            - np.array(result.X_WO_true)[:3, 3])), 3),
         "rise_m": round(float(result.object_rise_m), 6), "tilt_deg": round(float(result.object_tilt_deg), 4),
         "judge": measured, "timings": timings, "model_sha256": spec["model_sha256"],
+        "posterior": {k: (round(v, 6) if isinstance(v, float) else v) for k, v in result.posterior.items()},
     }
 
 

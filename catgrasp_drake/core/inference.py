@@ -58,6 +58,7 @@ outliers (tests); a wrong yaw or a wrong shape lowers it.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from concurrent.futures import ThreadPoolExecutor
@@ -111,7 +112,10 @@ class InferenceResult:
     rigid pose); ``energy`` the final E; ``sigma2`` (m^2); ``visible`` (M,)
     mask of the model points that were mixture centres at the end (all True
     without a camera); ``timing`` seconds (``total``, ``search``, ``refine``,
-    ``residual``); ``yaw`` the winning start's yaw (rad).
+    ``residual``); ``yaw`` the winning start's yaw (rad). ``hypotheses``: with
+    ``infer_latent_pose(hypotheses=k)``, the distinct refined fits, lowest
+    energy first (this result is the first, without its own ``hypotheses``);
+    empty otherwise.
     """
 
     x: np.ndarray
@@ -130,6 +134,7 @@ class InferenceResult:
     diagnostics: dict = field(default_factory=dict)
     space: ShapeSpace | None = field(default=None, repr=False)
     residual_W: np.ndarray | None = field(default=None, repr=False)
+    hypotheses: tuple = field(default=(), repr=False)
 
     @property
     def X_OC(self) -> np.ndarray:
@@ -411,6 +416,7 @@ def infer_latent_pose(
     residual_cpd: bool = False,
     residual_beta: float | None = None,
     residual_lam: float = 3.0,
+    hypotheses: int = 1,
 ) -> InferenceResult:
     """Fit latent x and a similarity (R, t, s) of ``space`` to ``observed`` (N, 3), metres.
 
@@ -442,7 +448,13 @@ def infer_latent_pose(
     visible completed points to O after the fit and moves the visible points
     only (visible surface detail; applied to the hidden points through its
     field it dragged them toward the data: unseen-part error 9.4 -> 12.0 mm
-    on the real drills).
+    on the real drills). ``hypotheses`` = k > 1: the k lowest-energy starts
+    of the yaw search (those kept after pruning) are each refined to
+    convergence, and the lowest final energy wins (the search's energies on a
+    subsample after ``search_iter`` iterations do not always rank the final
+    fits in order); the distinct refined fits (:data:`SAME_MODE_DEG`,
+    :data:`SAME_MODE_M`) are the result's ``hypotheses``, for a grasp chosen
+    across them. 1: the search's best start only (the earlier behaviour).
     """
     t0 = time.perf_counter()
     if not isinstance(space, ShapeSpace):
@@ -485,6 +497,7 @@ def infer_latent_pose(
         if residual_beta is not None:
             residual_beta = kernel_width(residual_beta, "residual_beta")
         residual_lam = positive(residual_lam, "residual_lam")
+    n_hypotheses = count(hypotheses, "hypotheses", 1, MAX_YAW_CANDIDATES)
     prob = _Problem(space, O, camera, w, prior, (lo, hi), radius_factor, bool(fit_scale))
 
     with single_threaded_blas():
@@ -524,53 +537,82 @@ def infer_latent_pose(
                     prob.run(states[i], O_sub, search_iter, 0.0, vis_every=vis_every, k_start=k_prune, float32=f32)
                     start_energies[i] = states[i].energy
                 states = [states[i] for i in kept]
-            best = None
-            for st in states:
-                if best is None or st.energy < best.energy:
-                    best = st
-            best.iterations = 0
-            best.converged = False
+            order = np.argsort([st.energy for st in states], kind="stable")  # ties keep the first
+            refine_first = [states[i] for i in order[:n_hypotheses]]
+            for st in refine_first:
+                st.iterations = 0
+                st.converged = False
         else:
-            best = start(yaws[0])
+            refine_first = [start(yaws[0])]
         t_search = time.perf_counter() - t0
-        # ---- refine (on at most max_points observed points)
-        best.visible = None
+        # ---- refine (on at most max_points observed points): the best start, or the ``hypotheses`` best
         O_fit = _subsample(O, max_points)
         # a pool even on one core: whether the E-step is split into blocks must not depend on the machine
         pool = ThreadPoolExecutor(n_threads())
         try:
-            st = prob.run(best, O_fit, max_iter, tol, vis_every=visibility_every, pool=pool,
-                          vis_move=visibility_move)
+            finished = []
+            for rank, st in enumerate(refine_first):
+                st.visible = None
+                st = prob.run(st, O_fit, max_iter, tol, vis_every=visibility_every, pool=pool,
+                              vis_move=visibility_move)
+                finished.append(_finish(prob, st, O, w, space, residual_cpd, residual_beta, residual_lam, rank))
         finally:
             if pool is not None:
                 pool.shutdown()
-        t_refine = time.perf_counter() - t0 - t_search
+    t_done = time.perf_counter() - t0
+    finished.sort(key=lambda r: r.energy)  # stable: ties keep the search's order
+    distinct = []
+    for r in finished:
+        if not any(_same_mode(r, d) for d in distinct):
+            distinct.append(r)
+    timing = {"total": t_done, "search": t_search, "refine": t_done - t_search - sum(r.timing["residual"]
+                                                                                     for r in distinct),
+              "residual": sum(r.timing["residual"] for r in distinct)}
+    best = dataclasses.replace(distinct[0], timing=timing)
+    best.diagnostics["start_energies"] = [float(e) for e in start_energies]
+    if n_hypotheses > 1:
+        best = dataclasses.replace(best, hypotheses=(best,) + tuple(distinct[1:]))
+    return best
 
-        Y = prob.model(st.x)
-        completed = st.s * Y @ st.R.T + st.t
-        vis = prob.visible(completed)
-        residual_W = None
-        t1 = time.perf_counter()
-        if residual_cpd:
-            src = completed[vis]
-            if len(src) >= 3:
-                rb = space.beta * st.s if residual_beta is None else residual_beta
-                r = nonrigid_cpd(src, O, beta=rb, lam=residual_lam, w=w, max_iter=50, tol=1e-5)
-                completed = completed.copy()
-                completed[vis] = r.transformed  # hidden points keep the latent completion
-                residual_W = r.W
-        t_residual = time.perf_counter() - t1
 
+#: Two refined hypotheses closer than this in rotation (deg) and translation (m) are one mode.
+SAME_MODE_DEG = 5.0
+SAME_MODE_M = 5e-3
+
+
+def _same_mode(a: InferenceResult, b: InferenceResult) -> bool:
+    cos = (np.trace(a.R.T @ b.R) - 1.0) / 2.0
+    return (math.degrees(math.acos(float(np.clip(cos, -1.0, 1.0)))) < SAME_MODE_DEG
+            and float(np.linalg.norm(a.t - b.t)) < SAME_MODE_M)
+
+
+def _finish(prob, st, O, w, space, residual_cpd, residual_beta, residual_lam, rank) -> InferenceResult:
+    """The result of one refined state (``rank``: its place in the search's energy order): completed shape,
+    visibility, optional residual CPD, confidence."""
+    Y = prob.model(st.x)
+    completed = st.s * Y @ st.R.T + st.t
+    vis = prob.visible(completed)
+    residual_W = None
+    t1 = time.perf_counter()
+    if residual_cpd:
+        src = completed[vis]
+        if len(src) >= 3:
+            rb = space.beta * st.s if residual_beta is None else residual_beta
+            r = nonrigid_cpd(src, O, beta=rb, lam=residual_lam, w=w, max_iter=50, tol=1e-5)
+            completed = completed.copy()
+            completed[vis] = r.transformed  # hidden points keep the latent completion
+            residual_W = r.W
+    t_residual = time.perf_counter() - t1
     conf, inlier, coverage, tau = _confidence(completed, vis, O)
-    timing = {"total": time.perf_counter() - t0, "search": t_search, "refine": t_refine, "residual": t_residual}
     diag = {
         "inlier": inlier,
         "coverage": coverage,
         "tau": tau,
-        "start_energies": [float(e) for e in start_energies],
+        "start_energies": [],
         "latent_norm": float(np.linalg.norm(st.x)),
         "n_visible": int(vis.sum()),
         "n_observed": int(len(O)),
+        "search_rank": int(rank),
     }
     return InferenceResult(
         x=st.x.copy(),
@@ -585,7 +627,7 @@ def infer_latent_pose(
         converged=bool(st.converged),
         yaw=float(st.yaw),
         visible=vis,
-        timing=timing,
+        timing={"residual": t_residual},
         diagnostics=diag,
         space=space,
         residual_W=residual_W,

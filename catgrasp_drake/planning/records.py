@@ -84,7 +84,9 @@ class GraspPlan:
     shape-preserving cubic decides; with it the arm is a cubic Hermite
     through the knots whose velocities at the NaN rows are the
     shape-preserving cubic's through those knots alone (the shake's knots
-    carry their exact velocities).
+    carry their exact velocities). ``candidate``: which of the grasp
+    candidates given to the planner this plan executes (0: the first, or the
+    only one); ``tried``: how many were planned to get it.
     """
 
     status: str
@@ -95,6 +97,8 @@ class GraspPlan:
     knot_names: tuple[str, ...] = ()
     solve_time_s: float = 0.0
     v_arm: np.ndarray | None = None
+    candidate: int = 0
+    tried: int = 1
 
     @property
     def ok(self) -> bool:

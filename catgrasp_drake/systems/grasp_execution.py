@@ -12,6 +12,7 @@ Both are ports and calls only: planning is :mod:`catgrasp_drake.planning`.
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Callable
 
 import numpy as np
@@ -155,6 +156,7 @@ class MotionPlanner(LeafSystem):
         - grasp_motion_W
         - confidence
         - object_cloud_W (with obstacle_model only)
+        - grasp_candidates_W (optional)
         output_ports:
         - plan
         - arm_desired_state
@@ -173,6 +175,13 @@ class MotionPlanner(LeafSystem):
             ``obstacle_model`` is given): the plan is made on
             ``obstacle_model(points_W)`` (>= 4 finite points), so the arm's way
             to the pregrasp avoids the object.
+        grasp_candidates_W: tuple of ``GraspCandidate`` (optional; e.g. from
+            ``GraspPredictor``), best first: when connected and not empty it
+            replaces ``grasp_motion_W`` -- each is planned in turn, around its
+            own ``object_points_W`` (with an ``obstacle_model``; else around
+            ``object_cloud_W``), and the first plan without collision is
+            executed (``plan.candidate`` says which); if none, the first's
+            failure is reported.
     Output ports:
         plan: ``GraspPlan`` (joint knots, timeline, status).
         arm_desired_state: [q; v] (2 * 6) of the arm, actuator order, rad and rad/s.
@@ -203,6 +212,7 @@ class MotionPlanner(LeafSystem):
         self._min_conf = float(min_confidence)
         self._motion_in = self.DeclareAbstractInputPort("grasp_motion_W", AbstractValue.Make(placeholder_motion_W()))
         self._conf_in = self.DeclareVectorInputPort("confidence", 1)
+        self._candidates_in = self.DeclareAbstractInputPort("grasp_candidates_W", AbstractValue.Make(()))
         self._obstacle_in = None
         if obstacle_model is not None:
             self._obstacle_in = self.DeclareAbstractInputPort("object_cloud_W", AbstractValue.Make(PointCloud()))
@@ -229,19 +239,35 @@ class MotionPlanner(LeafSystem):
         return self._cache.Eval(context)
 
     def _calc_plan(self, context, value):
-        motion = self._motion_in.Eval(context)
+        candidates = self._candidates_in.Eval(context) if self._candidates_in.HasValue(context) else ()
+        motion = candidates[0].motion if candidates else self._motion_in.Eval(context)
         conf = float(self._conf_in.Eval(context)[0]) if self._conf_in.HasValue(context) else 1.0
         refusal = refusal_status(conf, self._min_conf)
         if refusal is not None:
-            plan = hold_plan(self._planning.q_arm_start, motion.posture("open"), refusal)
-        else:
-            planning = self._planning
-            if self._obstacle_in is not None and self._obstacle_in.HasValue(context):
-                points_W = points_from_cloud(self._obstacle_in.Eval(context))
-                if len(points_W) >= 4:
-                    planning = self._obstacle_model(points_W)
-            plan = planning.plan(motion, self._params)
-        value.set_value(_PlanCache(plan))
+            value.set_value(_PlanCache(hold_plan(self._planning.q_arm_start, motion.posture("open"), refusal)))
+            return
+        cloud_W = None
+        if self._obstacle_in is not None and self._obstacle_in.HasValue(context):
+            cloud_W = points_from_cloud(self._obstacle_in.Eval(context))
+        if not candidates:
+            value.set_value(_PlanCache(self._planning_for(cloud_W).plan(motion, self._params)))
+            return
+        first = None
+        for i, c in enumerate(candidates):
+            points_W = c.object_points_W if len(c.object_points_W) >= 4 else cloud_W
+            plan = self._planning_for(points_W).plan(c.motion, self._params)
+            if plan.ok:
+                value.set_value(_PlanCache(dataclasses.replace(plan, candidate=i, tried=i + 1)))
+                return
+            first = first or plan
+        value.set_value(_PlanCache(dataclasses.replace(first, tried=len(candidates))))
+
+    def _planning_for(self, points_W) -> PlanningModel:
+        """The planning model with ``points_W`` (N, 3) as the object (>= 4 points and an obstacle model), else
+        without it."""
+        if self._obstacle_model is not None and points_W is not None and len(points_W) >= 4:
+            return self._obstacle_model(points_W)
+        return self._planning
 
     def _calc_arm(self, context, output: BasicVector):
         output.SetFromVector(self._plan_cache(context).arm_state(context.get_time())[self._arm_perm])

@@ -23,6 +23,7 @@ follow the camera's rendering of every step.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -68,7 +69,9 @@ class ShapeEstimate:
     every other field holds its neutral value (x = 0, identity pose,
     confidence 0). ``X_WO`` 4x4 rigid; ``scale`` dimensionless;
     ``completed_W`` (M, 3) metres; ``result`` the core's result in the
-    table frame T; ``timing`` seconds.
+    table frame T; ``timing`` seconds. ``hypotheses``: with the estimator's
+    ``hypotheses=k`` > 1, the distinct fits in W, lowest energy first (this
+    estimate is the first, with no ``hypotheses`` of its own); else empty.
     """
 
     ok: bool
@@ -82,6 +85,7 @@ class ShapeEstimate:
     observed_W: np.ndarray
     result: InferenceResult | None = None
     timing: dict = field(default_factory=dict)
+    hypotheses: tuple = ()
 
     # Contexts deep-copy abstract state; an estimate is never mutated (and holds the shape space).
     def __deepcopy__(self, memo):
@@ -147,11 +151,18 @@ def estimate_on_table(space: ShapeSpace, p_W: np.ndarray, X_WT: np.ndarray, *, c
         r = infer_latent_pose(space, p_T, camera_position=cam_T, yaw_candidates=yaw_candidates, **inference_kwargs)
     except CatgraspError as e:
         return failed_estimate(space.q, f"estimate failed: {e}", p_W)
-    X_TO = np.eye(4)
-    X_TO[:3, :3], X_TO[:3, 3] = r.R, r.t
-    completed_W = r.completed @ R_WT.T + p_WT
-    return ShapeEstimate(True, "ok", r.x.copy(), X_WT @ X_TO, float(r.s), completed_W, float(r.energy),
-                         float(r.confidence), p_W, r, dict(r.timing))
+
+    def in_world(r: InferenceResult) -> ShapeEstimate:
+        X_TO = np.eye(4)
+        X_TO[:3, :3], X_TO[:3, 3] = r.R, r.t
+        completed_W = r.completed @ R_WT.T + p_WT
+        return ShapeEstimate(True, "ok", r.x.copy(), X_WT @ X_TO, float(r.s), completed_W, float(r.energy),
+                             float(r.confidence), p_W, r, dict(r.timing))
+
+    best = in_world(r)
+    if r.hypotheses:
+        best = dataclasses.replace(best, hypotheses=(best,) + tuple(in_world(h) for h in r.hypotheses[1:]))
+    return best
 
 
 class LatentShapeEstimator(LeafSystem):

@@ -139,3 +139,33 @@ def test_search_options_are_checked(space):
                {"visibility_move": float("nan")}, {"search_float32": "yes"}, {"recenter_visibility": None}):
         with pytest.raises(InputError):
             infer_latent_pose(space, T, yaw_candidates=4, **kw)
+
+
+def test_shape_hypotheses_refine_the_best_starts_and_keep_distinct_fits(space):
+    """hypotheses=k refines the k best search starts: the lowest final energy wins (never worse than the search's
+    best start alone), the distinct fits come in energy order, the first is the result; 1 is the plain search."""
+    for xi, yaw_true, az in ((3, 2.0, 120), (3, 0.4, 250), (5, 3.0, 200), (5, -2.5, 80)):
+        T, vis, cam, R_true = _observe(space, space.latent_train[xi], yaw_true, np.array([0.02, 0.3, 0.0]), 1.0,
+                                       az_deg=az)
+        one = infer_latent_pose(space, T[vis], camera_position=cam, yaw_candidates=8)
+        many = infer_latent_pose(space, T[vis], camera_position=cam, yaw_candidates=8, hypotheses=4)
+        assert one.hypotheses == ()
+        assert many.energy <= one.energy  # the search's best start is among those refined
+        assert 2 <= len(many.hypotheses) <= 4
+        np.testing.assert_array_equal(many.hypotheses[0].x, many.x)
+        energies = [h.energy for h in many.hypotheses]
+        assert energies == sorted(energies)
+        assert rotation_angle(many.R @ R_true.T) < 0.1  # the true pose is the MAP fit
+        assert all(rotation_angle(h.R @ R_true.T) > 0.1 for h in many.hypotheses[1:])  # the others are other modes
+        for i, a in enumerate(many.hypotheses):
+            assert a.hypotheses == ()
+            for b in many.hypotheses[i + 1:]:
+                assert rotation_angle(a.R @ b.R.T) > np.radians(5.0) or np.linalg.norm(a.t - b.t) > 5e-3
+    # the first case: the search's best start was not the best fit (energy -2670 after the refine, -2674 for another)
+    T, vis, cam, _ = _observe(space, space.latent_train[3], 2.0, np.array([0.02, 0.3, 0.0]), 1.0, az_deg=120)
+    one = infer_latent_pose(space, T[vis], camera_position=cam, yaw_candidates=8)
+    many = infer_latent_pose(space, T[vis], camera_position=cam, yaw_candidates=8, hypotheses=3)
+    assert many.energy < one.energy - 1.0
+    for bad in (0, 1.5, "all", 400):
+        with pytest.raises(InputError, match="hypotheses"):
+            infer_latent_pose(space, T[vis], camera_position=cam, yaw_candidates=8, hypotheses=bad)

@@ -53,3 +53,34 @@ def test_low_confidence_is_refused_with_a_clear_status(setup):
     assert "low confidence (0.20 < 0.30): take another view" in plan.status
     ctx.SetTime(2.0)  # the arm holds its start configuration
     assert np.allclose(gen.GetOutputPort("arm_desired_state").Eval(ctx)[:6], planning.q_arm_start)
+
+
+def _lowered(motion, dz):
+    from catgrasp_drake.grasping.motion import GraspMotion
+
+    poses = np.array(motion.poses, float)
+    poses[:, 2, 3] -= dz
+    return GraspMotion(poses, motion.pose_names, dict(motion.postures), motion.frame, motion.lift_height,
+                       motion.hold_time)
+
+
+def test_candidates_fall_back_to_the_first_feasible_grasp(setup):
+    """A first candidate 8 cm below the table is refused by the planner; the second is planned and executed."""
+    from catgrasp_drake.prediction import GraspCandidate
+
+    planning, motion_W, gen = setup
+    low = _lowered(motion_W, 0.08)
+    assert not planning.plan(low).ok
+    candidate = {"object_points_W": np.zeros((0, 3)), "hypothesis": 0, "weight": 0.5, "support": 0.5,
+                 "functional_point_W": np.zeros(3)}
+    ctx = _context(gen, motion_W, 0.9)
+    gen.GetInputPort("grasp_candidates_W").FixValue(ctx, (GraspCandidate(low, **candidate),
+                                                          GraspCandidate(motion_W, **candidate)))
+    plan = gen.GetOutputPort("plan").Eval(ctx)
+    assert plan.ok and (plan.candidate, plan.tried) == (1, 2)
+    np.testing.assert_allclose(plan.q_arm, planning.plan(motion_W).q_arm, atol=1e-9)
+    ctx = _context(gen, motion_W, 0.9)  # none feasible: the first's failure, every candidate tried
+    gen.GetInputPort("grasp_candidates_W").FixValue(ctx, (GraspCandidate(low, **candidate),
+                                                          GraspCandidate(_lowered(motion_W, 0.1), **candidate)))
+    plan = gen.GetOutputPort("plan").Eval(ctx)
+    assert not plan.ok and plan.status == planning.plan(low).status and plan.tried == 2

@@ -117,3 +117,36 @@ def test_the_plan_is_made_once_for_every_method_while_the_simulation_steps(drill
         ctx.SetTime(1.0)  # and time passes, as in the simulation
         again = td.generator.GetOutputPort("plan").Eval(gen_ctx)
         assert again is plan, f"{method}: the plan was recomputed after the scene changed"
+
+
+def _moved(X, dx):
+    X = X.copy()
+    X[0, 3] += dx
+    return X
+
+
+def test_grasp_candidates_rank_by_the_posterior_mass_that_agrees_with_them(drill):
+    """Two hypotheses put the object 5 cm from where the MAP fit does: at T = 15 nats their joint weight (0.58)
+    outweighs the MAP's (0.42), so their grasp comes first; at T = 1 the MAP's weight (0.99) wins."""
+    from catgrasp_drake.prediction import ShapeHypothesis, grasp_candidates, hypothesis_weights
+
+    q = drill.space.q
+    X0 = _pose()
+    hyps = [ShapeHypothesis(np.zeros(q), X0, 1.0, np.zeros((4, 3)), -100.0),
+            ShapeHypothesis(np.zeros(q), _moved(X0, 0.05), 1.0, np.ones((4, 3)), -95.0),
+            ShapeHypothesis(np.zeros(q), _moved(X0, 0.05), 1.0, 2 * np.ones((4, 3)), -94.0)]
+    w = np.exp([0.0, -5.0 / 15.0, -6.0 / 15.0])
+    np.testing.assert_allclose(hypothesis_weights([-100.0, -95.0, -94.0]), w / w.sum())
+    ranked = grasp_candidates("latent", drill, hyps)
+    assert [c.hypothesis for c in ranked] == [1, 2, 0]
+    assert ranked[0].support == pytest.approx((w[1] + w[2]) / w.sum())
+    assert ranked[2].support == pytest.approx(w[0] / w.sum())
+    np.testing.assert_array_equal(ranked[0].object_points_W, hyps[1].completed_W)  # its own shape to plan around
+    np.testing.assert_allclose(ranked[0].functional_point_W - ranked[2].functional_point_W, [0.05, 0, 0], atol=1e-12)
+    map_motion, _ = predict_motion("latent", drill, np.zeros(q), X0, 1.0)
+    np.testing.assert_array_equal(ranked[2].motion.poses, map_motion.poses)
+    assert [c.hypothesis for c in grasp_candidates("latent", drill, hyps, temperature=1.0)] == [0, 1, 2]
+    with pytest.raises(InputError, match="at least one"):
+        grasp_candidates("latent", drill, [])
+    with pytest.raises(InputError, match="temperature"):
+        hypothesis_weights([1.0], temperature=0.0)
