@@ -180,3 +180,15 @@ def test_physics_settings_change_the_station_they_name():
     assert station("time_step_1e-3")[3] == 1e-3 and dt0 == 5e-3
     with pytest.raises(InputError, match="physics"):
         with_physics(load_scenario("drill_default"), "zero_gravity")
+
+
+def test_the_cli_offers_every_benchmark_method():
+    """The CLI's literal method lists (it imports no stack at parse time) agree with the runner and predictors."""
+    from catgrasp_drake.benchmark.runner import BENCHMARK_METHODS
+    from catgrasp_drake.cli import build_parser
+    from catgrasp_drake.prediction import METHODS
+
+    action = next(a for a in build_parser()._subparsers._group_actions[0].choices["benchmark"]._actions
+                  if a.dest == "methods")
+    assert tuple(action.default) == BENCHMARK_METHODS
+    assert set(action.choices) == set(METHODS)
