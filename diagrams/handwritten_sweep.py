@@ -2,7 +2,7 @@
 
     python diagrams/handwritten_sweep.py [--categories drill spray_bottle mug] [--workers 2]
                                          [--cache out/handwritten_sweep_cache] [--json out/handwritten_sweep.json]
-                                         [--shift DX DY DZ] [--rotate RX RY RZ]
+                                         [--shift DX DY DZ] [--rotate RX RY RZ] [--model FILE]
 
 Each trial uses the category's default scenario (``<category>_default`` in
 ``models/station.scenarios.yaml``) with the object replaced by the instance,
@@ -11,7 +11,12 @@ anchored to the instance's annotated region (``load_handwritten_motion``).
 ``--shift`` (m) and ``--rotate`` (deg, object-frame x-y-z Euler angles about
 the anchor region's centre) move the whole grasp in the object frame: the way
 to try a change to a hand-written grasp, and to see how far off a predicted
-grasp may land before it fails. Trials run in parallel worker processes through
+grasp may land before it fails. ``--model FILE`` (a trained model of ONE
+category) runs the model's learned grasp instead on each of its training
+instances -- the regressed grasp R(x_i) warped by W(x_i), exactly what the
+transfer executes under perfect perception -- so ``--shift`` shows how sharp
+the learned knowledge's optimum is (on the instances it was learned from).
+Trials run in parallel worker processes through
 :func:`catgrasp_drake.runner.run_tasks` and are cached on disk by (spec, code
 fingerprint), so a re-run only computes what changed. Prints one table row
 per instance (grasp, functional, failure reason) and a summary per category.
@@ -38,7 +43,8 @@ def sweep_task(spec: dict) -> dict:
     category, instance = spec["category"], spec["instance"]
     base = load_scenario(f"{category}_default")
     scenario = replace(base, name=f"{category}_default:{instance}", object=replace(base.object, instance=instance))
-    motion = load_handwritten_motion(category, instance)
+    motion = learned_motion(spec["model"], category, instance) if spec.get("model") else \
+        load_handwritten_motion(category, instance)
     if spec.get("shift") or spec.get("rotate"):
         motion = shifted_motion(motion, category, instance, spec.get("shift") or (0, 0, 0),
                                 spec.get("rotate") or (0, 0, 0))
@@ -51,6 +57,20 @@ def sweep_task(spec: dict) -> dict:
         "trigger_force_N": r.trigger_force_N, "in_hand_shift_m": r.in_hand_shift_m,
         "in_hand_turn_deg": r.in_hand_turn_deg,
     }
+
+
+_MODELS: dict = {}
+
+
+def learned_motion(path: str, category: str, instance: str):
+    """The model's learned grasp for its training instance ``instance`` (object frame): R(x_i) warped by W(x_i)."""
+    from catgrasp_drake.category_model import CategoryModel
+
+    if (path, category) not in _MODELS:
+        _MODELS[(path, category)] = CategoryModel.load(path, category=category)
+    model = _MODELS[(path, category)]
+    k = list(model.instances).index(instance)
+    return model.transfer(model.space.latent_train[k], frame="object")
 
 
 def _fmt(value, width: int, digits: int, scale: float = 1.0) -> str:
@@ -80,10 +100,22 @@ def main(argv=None) -> int:
                     help="move every grasp by this (m, object frame)")
     ap.add_argument("--rotate", type=float, nargs=3, metavar=("RX", "RY", "RZ"),
                     help="turn every grasp about its anchor region's centre (deg, object-frame x-y-z Euler angles)")
+    ap.add_argument("--model", type=Path, help="a trained model: its learned grasp on each of its training "
+                                                 "instances instead of the hand-written one (one category)")
     args = ap.parse_args(argv)
 
     variant = {k: list(v) for k, v in (("shift", args.shift), ("rotate", args.rotate)) if v and any(v)}
-    specs = [{"category": c, "instance": i, **variant} for c in args.categories for i in list_instances(c)
+    instances = {c: list_instances(c) for c in args.categories}
+    if args.model is not None:
+        from catgrasp_drake.category_model import CategoryModel
+        from catgrasp_drake.core.fileio import file_sha256
+
+        if len(args.categories) != 1:
+            ap.error("--model: give the model's one category with --categories")
+        model = CategoryModel.load(args.model, category=args.categories[0])
+        instances = {args.categories[0]: list(model.instances)}
+        variant |= {"model": str(args.model), "model_sha256": file_sha256(args.model)}
+    specs = [{"category": c, "instance": i, **variant} for c in args.categories for i in instances[c]
              if not args.instances or i in args.instances]
 
     def progress(outcome, done, total):
