@@ -259,7 +259,8 @@ class MotionPlanner(LeafSystem):
             if plan.ok:
                 value.set_value(_PlanCache(dataclasses.replace(plan, candidate=i, tried=i + 1)))
                 return
-            first = first or plan
+            if first is None:
+                first = plan
         value.set_value(_PlanCache(dataclasses.replace(first, tried=len(candidates))))
 
     def _planning_for(self, points_W) -> PlanningModel:

@@ -114,8 +114,9 @@ class GraspPredictor(LeafSystem):
 
     def _calc_candidates(self, context, value):
         estimate = self._estimate_in.Eval(context) if self._estimate_in.HasValue(context) else None
-        if estimate is not None and estimate.ok and len(estimate.hypotheses) > 1 and self._method != "cpd":
-            hypotheses = [ShapeHypothesis(h.x, h.X_WO, h.scale, h.completed_W, h.energy) for h in estimate.hypotheses]
+        fits = [h for h in estimate.hypotheses if np.isfinite(h.energy)] if estimate is not None and estimate.ok else []
+        if len(fits) > 1 and self._method != "cpd":
+            hypotheses = [ShapeHypothesis(h.x, h.X_WO, h.scale, h.completed_W, h.energy) for h in fits]
             value.set_value(tuple(grasp_candidates(self._method, self._model, hypotheses)))
             return
         motion = self._single(context)
