@@ -292,6 +292,13 @@ def _model(path: str, category: str):
     return _MODELS[key]
 
 
+def yaw_error_deg(X_WO_estimated, X_WO_true) -> float:
+    """Signed angle (deg, in (-180, 180]) about the world z from the true object's functional direction (+y of O,
+    projected on the table) to the estimated one: which way round the object was fitted."""
+    y_est, y_true = np.asarray(X_WO_estimated, float)[:2, 1], np.asarray(X_WO_true, float)[:2, 1]
+    return math.degrees(math.atan2(y_true[0] * y_est[1] - y_true[1] * y_est[0], float(y_true @ y_est)))
+
+
 def benchmark_trial_task(spec: dict) -> dict:
     """Worker task: one benchmark trial (spec from :func:`trial_specs`) -> its record (JSON-able)."""
     from catgrasp_drake.transfer import make_transfer_diagram, run_transfer
@@ -314,6 +321,7 @@ def benchmark_trial_task(spec: dict) -> dict:
         "num_points": int(result.num_observed_points), "placement": placement, "camera": camera,
         "pose_error_mm": round(1000 * float(np.linalg.norm(np.array(result.X_WO_estimated)[:3, 3]
                                                            - np.array(result.X_WO_true)[:3, 3])), 3),
+        "yaw_error_deg": round(yaw_error_deg(result.X_WO_estimated, result.X_WO_true), 3),
         "rise_m": round(float(result.object_rise_m), 6), "tilt_deg": round(float(result.object_tilt_deg), 4),
         "judge": measured, "timings": timings, "model_sha256": spec["model_sha256"],
         "posterior": {k: (round(v, 6) if isinstance(v, float) else v) for k, v in result.posterior.items()},

@@ -139,6 +139,8 @@ def test_smoke_benchmark_runs_the_transfer_diagram_and_records_every_trial(tmp_p
         assert r["num_points"] > 300 and 0 < r["confidence"] <= 1
         assert r["timings"]["simulated_s"] > 5
         assert r["pose_error_mm"] < 30  # the fit found the drill
+        assert abs(r["yaw_error_deg"]) < 20  # ... the right way round
+        assert r["posterior"]["hypotheses"] >= 1 and r["posterior"]["tried"] >= 1
     path = tmp_path / "smoke.jsonl"
     write_benchmark_records(path, records)
     assert load_benchmark_records(path) == records
@@ -192,3 +194,19 @@ def test_the_cli_offers_every_benchmark_method():
                   if a.dest == "methods")
     assert tuple(action.default) == BENCHMARK_METHODS
     assert set(action.choices) == set(METHODS)
+
+
+def test_yaw_error_is_the_signed_turn_of_the_functional_direction_about_z():
+    from catgrasp_drake.benchmark.runner import yaw_error_deg
+    from catgrasp_drake.core.rotations import rotz
+
+    def pose(yaw, tilt=0.0):
+        X = np.eye(4)
+        X[:3, :3] = rotz(yaw) @ np.array([[1, 0, 0], [0, np.cos(tilt), -np.sin(tilt)], [0, np.sin(tilt), np.cos(tilt)]])
+        X[:3, 3] = [0.5, 0.1, 0.0]
+        return X
+
+    assert yaw_error_deg(pose(0.3), pose(0.3)) == pytest.approx(0.0, abs=1e-9)
+    assert yaw_error_deg(pose(0.3 + np.radians(25)), pose(0.3)) == pytest.approx(25.0)
+    assert yaw_error_deg(pose(0.3 - np.radians(170)), pose(0.3)) == pytest.approx(-170.0)
+    assert yaw_error_deg(pose(1.0, tilt=0.2), pose(1.0)) == pytest.approx(0.0, abs=1e-9)  # a tilt is not a yaw
