@@ -49,8 +49,9 @@ def main(argv=None) -> int:
                     default=[f"models/trained/{c}.npz" for c in ("drill", "spray_bottle", "mug")])
     args = ap.parse_args(argv)
     names = tuple(REGRESSOR_GRID)
-    print("| model | instances | rows | " + " | ".join(names) + " | automatic choice | the model's regressor |")
-    print("|---|---:|---:|" + "---:|" * (len(names) + 2))
+    print("| model | instances | rows | " + " | ".join(names) + " | automatic choice (least error) | "
+          "automatic choice (one-SE rule) | the model's regressor |")
+    print("|---|---:|---:|" + "---:|" * (len(names) + 3))
     for path in args.models:
         model = CategoryModel.load(path)
         X, Y, g = model.training_latent, model.training_descriptors, np.asarray(model.training_groups)
@@ -61,10 +62,11 @@ def main(argv=None) -> int:
         t0 = time.perf_counter()
         family = {n: nested_loo_error(X, Y, g, error, (n,)) for n in names}
         auto = nested_loo_error(X, Y, g, error, names)
+        auto_1se = nested_loo_error(X, Y, g, error, names, rule="one_se")
         own = model.stats.get("regression", {"regressor": f"ridge (alpha {model.regressor.alpha:g})"})
         cells = " | ".join(f"{1000 * family[n]:.1f}" for n in names)
         print(f"| {path} | {len(np.unique(g))} | {len(model.training_groups)} | {cells} | {1000 * auto:.1f} | "
-              f"{own['regressor']} {own.get('hyperparameters', '')} |", flush=True)
+              f"{1000 * auto_1se:.1f} | {own['regressor']} {own.get('hyperparameters', '')} |", flush=True)
         print(f"  ({time.perf_counter() - t0:.1f} s)", file=sys.stderr)
     print("\nErrors in mm at the grasp's functional point, nested leave-one-instance-out (module docstring).")
     return 0

@@ -317,14 +317,23 @@ def search_training_grasps(category, space, instances, template, config, annotat
     return kept, stats, record
 
 
+#: How ``--regressor auto`` chooses (``core.regression.select_regressor``): the simplest candidate within one
+#: standard error of the least leave-one-instance-out error. Nested leave-one-instance-out on the committed
+#: searched models (``benchmarks/bench_regression.py``), least-error rule -> one-SE rule: drill 5.6 -> 5.1 mm,
+#: spray bottle 10.7 -> 9.8, mug 5.6 -> 5.6 (the least-error choice among 23 candidates on 10-13 instances
+#: overfits).
+REGRESSOR_RULE = "one_se"
+
+
 def fit_grasp_regressor(X, Y, groups, weights, config: TrainingConfig, template: GraspMotion, anchor_H):
     """The regressor latent -> canonical descriptor: ``(regressor, selection)``.
 
     ``config.regressor == "ridge"``: ridge with ``config.ridge_alpha`` (rows weighted as in
     ``core.regression.fit_ridge``). ``"auto"``: on the instances' (weighted) mean descriptors, the
-    candidate of ``core.regression.REGRESSOR_GRID`` with the least leave-one-instance-out error of the
-    functional point (m); ``selection`` names it, with each family's best error (mm). With fewer than
-    3 instances holding grasps there is nothing to choose with: ridge, and ``selection`` says why.
+    candidate of ``core.regression.REGRESSOR_GRID`` chosen by leave-one-instance-out error of the
+    functional point (m) with the one-standard-error rule (:data:`REGRESSOR_RULE`); ``selection`` names
+    it, with each family's best error (mm). With fewer than 3 instances holding grasps there is nothing
+    to choose with: ridge, and ``selection`` says why.
     """
     X, Y, groups = np.asarray(X, float), np.asarray(Y, float), np.asarray(groups)
     if config.regressor == "ridge":
@@ -340,9 +349,10 @@ def fit_grasp_regressor(X, Y, groups, weights, config: TrainingConfig, template:
         return float(np.mean([np.linalg.norm(c - functional_point(r, template, anchor_H)) for r in rows]))
 
     families = {n: select_regressor(x, y, g, error, (n,)) for n in REGRESSOR_GRID}
-    name, hyper, err = min(families.values(), key=lambda f: f[2])
+    name, hyper, err = select_regressor(x, y, g, error, tuple(REGRESSOR_GRID), rule=REGRESSOR_RULE)
     regressor = REGRESSOR_GRID[name][0](x, y, g, **hyper)
     return regressor, {"regressor": name, "hyperparameters": hyper, "loo_error_mm": round(1000 * err, 2),
+                       "rule": REGRESSOR_RULE,
                        "loo_error_mm_by_family": {n: round(1000 * f[2], 2) for n, f in families.items()}}
 
 
@@ -365,6 +375,19 @@ def _sampled_training_grasps(category, space, instances, template, config, annot
         if simulated and r.get("functional_success"):
             kept.append(_Kept(cand.instance_index, cand.motion, 1.0))
     return kept, stats
+
+
+def refit_regressor(model: CategoryModel, config: TrainingConfig = TrainingConfig(regressor="auto")) -> CategoryModel:
+    """``model`` with its regressor fitted again on its own stored training set (no simulation), as
+    ``train_category`` would fit it with ``config`` (e.g. after a change of :data:`REGRESSOR_RULE`);
+    ``stats["regression"]`` is replaced and says so."""
+    if model.training_latent is None:
+        raise InputError("refit_regressor: the model file holds no training set")
+    regressor, selection = fit_grasp_regressor(model.training_latent, model.training_descriptors,
+                                               model.training_groups, model.training_weights, config,
+                                               model.template, model.grasp_anchor_H)
+    stats = dict(model.stats) | {"regression": selection | {"refitted": True}}
+    return dataclasses.replace(model, regressor=regressor, stats=stats)
 
 
 def train_category(

@@ -254,39 +254,76 @@ REGRESSOR_GRID: dict = {
 }
 
 
-def leave_one_instance_out(X, Y, groups, fit, error) -> float:
+def leave_one_instance_out(X, Y, groups, fit, error, *, per_instance: bool = False):
     """Mean over instances of ``error(prediction at the instance's x, that instance's rows)`` with
-    ``fit(X, Y, groups)`` trained on the other instances."""
+    ``fit(X, Y, groups)`` trained on the other instances (``per_instance``: the (n,) errors instead)."""
     g = np.asarray(groups)
     errs = []
     for label in np.unique(g):
         keep = g != label
         model = fit(X[keep], Y[keep], g[keep])
         errs.append(float(error(model.predict(X[g == label][0]), Y[g == label])))
-    return float(np.mean(errs))
+    return np.array(errs) if per_instance else float(np.mean(errs))
 
 
-def select_regressor(X, Y, groups, error, names=tuple(REGRESSOR_GRID)) -> tuple[str, dict, float]:
-    """``(name, hyperparameters, LOO error)`` of the candidate (``names`` x their grids) with the least
-    leave-one-instance-out ``error`` on ``(X, Y, groups)``."""
-    best = None
-    for name in names:
-        fit, grid = REGRESSOR_GRID[name]
-        for h in grid:
-            e = leave_one_instance_out(X, Y, groups, lambda a, b, c, h=h, fit=fit: fit(a, b, c, **h), error)
-            if best is None or e < best[2] - 1e-15:
-                best = (name, h, e)
-    return best
+#: Selection rules of :func:`select_regressor`.
+SELECTION_RULES = ("min", "one_se")
 
 
-def nested_loo_error(X, Y, groups, error, names) -> float:
-    """The honest error of :func:`select_regressor`: every instance predicted by the candidate chosen by
-    leave-one-instance-out on the OTHER instances (so the choice never saw it)."""
+def _simplest_first(names) -> list[tuple[str, dict]]:
+    """The candidates of ``names``, simplest first: the mean, ridge (strongest penalty first), kernel ridge
+    (strongest penalty, widest kernel first), then the nearest instance (no smoothing at all)."""
+    order = {"mean": 0, "ridge": 1, "kernel_ridge": 2, "nearest": 3}
+    out = []
+    for name in sorted(names, key=lambda n: order.get(n, len(order))):
+        grid = REGRESSOR_GRID[name][1]
+        grid = sorted(grid, key=lambda h: (-h.get("alpha", 0.0), -h.get("length_scale", 0.0)))
+        out += [(name, h) for h in grid]
+    return out
+
+
+def select_regressor(X, Y, groups, error, names=tuple(REGRESSOR_GRID), rule: str = "min") -> tuple[str, dict, float]:
+    """``(name, hyperparameters, LOO error)`` of a candidate (``names`` x their grids) by leave-one-instance-out
+    ``error`` on ``(X, Y, groups)``.
+
+    ``rule`` "min": the least error (ties: the first in ``names`` order). "one_se": the simplest candidate
+    (:func:`_simplest_first`) whose error is within one standard error of the least (the standard error of
+    the best candidate's per-instance errors) -- a choice among many candidates on few instances otherwise
+    favours a flexible one by luck.
+    """
+    if rule not in SELECTION_RULES:
+        raise InputError(f"rule: expected one of {SELECTION_RULES}, got {rule!r}")
+    if rule == "min":
+        best = None
+        for name in names:
+            fit, grid = REGRESSOR_GRID[name]
+            for h in grid:
+                e = leave_one_instance_out(X, Y, groups, lambda a, b, c, h=h, fit=fit: fit(a, b, c, **h), error)
+                if best is None or e < best[2] - 1e-15:
+                    best = (name, h, e)
+        return best
+    scored = []
+    for name, h in _simplest_first(names):
+        fit = REGRESSOR_GRID[name][0]
+        scored.append((name, h, leave_one_instance_out(X, Y, groups, lambda a, b, c, h=h, fit=fit: fit(a, b, c, **h),
+                                                       error, per_instance=True)))
+    best = min(scored, key=lambda c: float(np.mean(c[2])))
+    errs = best[2]
+    se = float(np.std(errs, ddof=1) / np.sqrt(len(errs))) if len(errs) > 1 else 0.0
+    for name, h, e in scored:
+        if float(np.mean(e)) <= float(np.mean(errs)) + se:
+            return name, h, float(np.mean(e))
+    return best[0], best[1], float(np.mean(errs))  # (unreachable: the best is within its own bound)
+
+
+def nested_loo_error(X, Y, groups, error, names, rule: str = "min") -> float:
+    """The honest error of :func:`select_regressor` (with ``rule``): every instance predicted by the candidate
+    chosen by leave-one-instance-out on the OTHER instances (so the choice never saw it)."""
     g = np.asarray(groups)
     errs = []
     for label in np.unique(g):
         keep = g != label
-        name, h, _ = select_regressor(X[keep], Y[keep], g[keep], error, names)
+        name, h, _ = select_regressor(X[keep], Y[keep], g[keep], error, names, rule)
         model = REGRESSOR_GRID[name][0](X[keep], Y[keep], g[keep], **h)
         errs.append(float(error(model.predict(X[g == label][0]), Y[g == label])))
     return float(np.mean(errs))

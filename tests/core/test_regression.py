@@ -152,3 +152,25 @@ def test_every_regressor_kind_round_trips_through_arrays(name):
         regressor_from_arrays({k: v for k, v in arrays.items() if k != first}, meta)
     with pytest.raises(InputError, match="inconsistent"):
         regressor_from_arrays(arrays | {first: arrays[first][:, :1].T}, meta)
+
+
+def test_the_one_standard_error_rule_keeps_the_mean_on_noise_and_the_shape_map_where_there_is_one():
+    """Grasps independent of shape (13 instances, like the committed models): the least-error rule may pick a
+    flexible family by luck, the one-SE rule keeps the mean, and its nested error is no worse than the least-error
+    rule's. Grasps determined by shape: both rules find kernel ridge."""
+    from catgrasp_drake.core.regression import nested_loo_error, select_regressor
+
+    rng = np.random.default_rng(5)
+    X = np.repeat(rng.normal(size=(13, 9)), 3, axis=0)
+    Y = rng.normal(size=(39, 4))
+    g = np.repeat(np.arange(13), 3)
+    name, h, e = select_regressor(X, Y, g, _err, rule="one_se")
+    assert (name, h) == ("mean", {})
+    _, _, e_min = select_regressor(X, Y, g, _err)
+    assert e_min <= e  # the least error is the least; the rule trades a little of it for simplicity
+    assert nested_loo_error(X, Y, g, _err, ("mean", "nearest", "ridge", "kernel_ridge"), rule="one_se") <= \
+        nested_loo_error(X, Y, g, _err, ("mean", "nearest", "ridge", "kernel_ridge")) + 1e-12
+    X, Y, g = _grasps_determined_by_shape(n_instances=30)
+    assert select_regressor(X, Y, g, _err, rule="one_se")[0] == "kernel_ridge"
+    with pytest.raises(InputError, match="rule"):
+        select_regressor(X, Y, g, _err, rule="best")
