@@ -50,7 +50,7 @@ from catgrasp_drake.core.cpd import nonrigid_cpd
 from catgrasp_drake.core.deformation import warp_poses
 from catgrasp_drake.core.threads import single_threaded_blas
 from catgrasp_drake.errors import InputError
-from catgrasp_drake.grasping.descriptor import motion_from_descriptor
+from catgrasp_drake.grasping.descriptor import motion_from_descriptor, motion_functional_point
 from catgrasp_drake.grasping.motion import GraspMotion
 
 METHODS = ("latent", "paper", "rigid", "cpd", "nearest", "true_object", "latent_map")
@@ -215,13 +215,6 @@ def hypothesis_weights(energies, temperature: float = POSTERIOR_TEMPERATURE) -> 
     return w / w.sum()
 
 
-def functional_point_W(motion: GraspMotion, anchor_H) -> np.ndarray:
-    """The grasp's functional point in W: ``anchor_H`` (3,) m (None: the origin) through the grasp pose."""
-    X = np.asarray(motion.poses[motion.pose_names.index("grasp")], float)
-    a = np.zeros(3) if anchor_H is None else np.asarray(anchor_H, float)
-    return X[:3, :3] @ a + X[:3, 3]
-
-
 def grasp_candidates(method: str, model: CategoryModel, hypotheses, *, temperature: float = POSTERIOR_TEMPERATURE,
                      radius: float = SUPPORT_RADIUS_M) -> list[GraspCandidate]:
     """``method``'s grasp for each :class:`ShapeHypothesis` (energy order), ranked by support (module docstring).
@@ -234,7 +227,7 @@ def grasp_candidates(method: str, model: CategoryModel, hypotheses, *, temperatu
         raise InputError("hypotheses: expected at least one shape hypothesis")
     w = hypothesis_weights([h.energy for h in hypotheses], temperature)
     motions = [predict_motion(method, model, h.x, h.X_WO, h.scale)[0] for h in hypotheses]
-    f = np.array([functional_point_W(m, model.grasp_anchor_H) for m in motions])
+    f = np.array([motion_functional_point(m, model.grasp_anchor_H) for m in motions])
     near = np.linalg.norm(f[:, None] - f[None], axis=2) <= float(radius)
     support = near.astype(float) @ w
     out = [GraspCandidate(m, np.asarray(h.completed_W, float), i, float(w[i]), float(support[i]), f[i])

@@ -49,7 +49,7 @@ import numpy as np
 
 from catgrasp_drake.category_model import CategoryModel
 from catgrasp_drake.core.deformation import inverse_warp_poses, warp_poses
-from catgrasp_drake.core.regression import REGRESSOR_GRID, fit_ridge, instance_means, select_regressor
+from catgrasp_drake.core.regression import REGRESSOR_GRID, choose_regressor, fit_ridge, instance_means, score_regressors
 from catgrasp_drake.core.shape_space import build_shape_space
 from catgrasp_drake.data.dataset import (
     imported_object,
@@ -348,8 +348,9 @@ def fit_grasp_regressor(X, Y, groups, weights, config: TrainingConfig, template:
         c = functional_point(pred, template, anchor_H)
         return float(np.mean([np.linalg.norm(c - functional_point(r, template, anchor_H)) for r in rows]))
 
-    families = {n: select_regressor(x, y, g, error, (n,)) for n in REGRESSOR_GRID}
-    name, hyper, err = select_regressor(x, y, g, error, tuple(REGRESSOR_GRID), rule=REGRESSOR_RULE)
+    scored = score_regressors(x, y, g, error)  # every candidate once; each family's best and the choice from it
+    families = {n: choose_regressor([c for c in scored if c[0] == n]) for n in REGRESSOR_GRID}
+    name, hyper, err = choose_regressor(scored, REGRESSOR_RULE)
     regressor = REGRESSOR_GRID[name][0](x, y, g, **hyper)
     return regressor, {"regressor": name, "hyperparameters": hyper, "loo_error_mm": round(1000 * err, 2),
                        "rule": REGRESSOR_RULE,

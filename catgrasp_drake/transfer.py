@@ -342,8 +342,8 @@ def run_transfer(td: TransferDiagram, *, record_html=None, return_context: bool 
     plan = td.generator.GetOutputPort("plan").Eval(td.generator.GetMyContextFromRoot(context))
     timings["plan"] = time.perf_counter() - t0
     candidates = td.regressor.GetOutputPort("grasp_candidates_W").Eval(td.regressor.GetMyContextFromRoot(context))
-    chosen = candidates[plan.candidate] if plan.candidate < len(candidates) else candidates[0]
-    motion = chosen.motion if len(candidates) > 1 else motion
+    chosen = candidates[plan.candidate]  # the executed grasp (the only candidate without a posterior)
+    motion = chosen.motion
     search_rank = estimate.result.diagnostics.get("search_rank", 0) if estimate.result is not None else 0
     posterior = {"hypotheses": max(1, len(estimate.hypotheses)), "search_rank": int(search_rank),
                  "candidate": int(plan.candidate),

@@ -270,50 +270,57 @@ def leave_one_instance_out(X, Y, groups, fit, error, *, per_instance: bool = Fal
 SELECTION_RULES = ("min", "one_se")
 
 
-def _simplest_first(names) -> list[tuple[str, dict]]:
-    """The candidates of ``names``, simplest first: the mean, ridge (strongest penalty first), kernel ridge
-    (strongest penalty, widest kernel first), then the nearest instance (no smoothing at all)."""
-    order = {"mean": 0, "ridge": 1, "kernel_ridge": 2, "nearest": 3}
+#: Families from the simplest to the most flexible (the one-SE rule's order); within a family the
+#: strongest penalty and the widest kernel come first.
+SIMPLICITY = ("mean", "ridge", "kernel_ridge", "nearest")
+
+
+def _simplicity(candidate) -> tuple:
+    name, h = candidate[0], candidate[1]
+    rank = SIMPLICITY.index(name) if name in SIMPLICITY else len(SIMPLICITY)
+    return rank, -h.get("alpha", 0.0), -h.get("length_scale", 0.0)
+
+
+def score_regressors(X, Y, groups, error, names=tuple(REGRESSOR_GRID)) -> list[tuple[str, dict, np.ndarray]]:
+    """Every candidate (``names`` x their grids, in that order) with its per-instance leave-one-instance-out
+    ``error`` on ``(X, Y, groups)``: ``[(name, hyperparameters, errors (n,)), ...]``."""
     out = []
-    for name in sorted(names, key=lambda n: order.get(n, len(order))):
-        grid = REGRESSOR_GRID[name][1]
-        grid = sorted(grid, key=lambda h: (-h.get("alpha", 0.0), -h.get("length_scale", 0.0)))
-        out += [(name, h) for h in grid]
+    for name in names:
+        fit, grid = REGRESSOR_GRID[name]
+        for h in grid:
+            errs = leave_one_instance_out(X, Y, groups, lambda a, b, c, h=h, fit=fit: fit(a, b, c, **h), error,
+                                          per_instance=True)
+            out.append((name, h, errs))
     return out
 
 
-def select_regressor(X, Y, groups, error, names=tuple(REGRESSOR_GRID), rule: str = "min") -> tuple[str, dict, float]:
-    """``(name, hyperparameters, LOO error)`` of a candidate (``names`` x their grids) by leave-one-instance-out
-    ``error`` on ``(X, Y, groups)``.
+def choose_regressor(scored, rule: str = "min") -> tuple[str, dict, float]:
+    """``(name, hyperparameters, mean LOO error)`` chosen from :func:`score_regressors`' list by ``rule``.
 
-    ``rule`` "min": the least error (ties: the first in ``names`` order). "one_se": the simplest candidate
-    (:func:`_simplest_first`) whose error is within one standard error of the least (the standard error of
-    the best candidate's per-instance errors) -- a choice among many candidates on few instances otherwise
-    favours a flexible one by luck.
+    "min": the least mean error (ties: the first listed). "one_se": the simplest candidate (:data:`SIMPLICITY`)
+    whose error is within one standard error of the least (the standard error of the best candidate's
+    per-instance errors) -- a choice among many candidates on few instances otherwise favours a flexible one by
+    luck.
     """
     if rule not in SELECTION_RULES:
         raise InputError(f"rule: expected one of {SELECTION_RULES}, got {rule!r}")
-    if rule == "min":
-        best = None
-        for name in names:
-            fit, grid = REGRESSOR_GRID[name]
-            for h in grid:
-                e = leave_one_instance_out(X, Y, groups, lambda a, b, c, h=h, fit=fit: fit(a, b, c, **h), error)
-                if best is None or e < best[2] - 1e-15:
-                    best = (name, h, e)
-        return best
-    scored = []
-    for name, h in _simplest_first(names):
-        fit = REGRESSOR_GRID[name][0]
-        scored.append((name, h, leave_one_instance_out(X, Y, groups, lambda a, b, c, h=h, fit=fit: fit(a, b, c, **h),
-                                                       error, per_instance=True)))
-    best = min(scored, key=lambda c: float(np.mean(c[2])))
-    errs = best[2]
-    se = float(np.std(errs, ddof=1) / np.sqrt(len(errs))) if len(errs) > 1 else 0.0
-    for name, h, e in scored:
-        if float(np.mean(e)) <= float(np.mean(errs)) + se:
-            return name, h, float(np.mean(e))
-    return best[0], best[1], float(np.mean(errs))  # (unreachable: the best is within its own bound)
+    best = None
+    for c in scored:
+        if best is None or float(np.mean(c[2])) < float(np.mean(best[2])) - 1e-15:
+            best = c
+    if rule == "one_se":
+        errs = best[2]
+        bound = float(np.mean(errs)) + (float(np.std(errs, ddof=1) / np.sqrt(len(errs))) if len(errs) > 1 else 0.0)
+        best = next(c for c in sorted(scored, key=_simplicity) if float(np.mean(c[2])) <= bound)  # best qualifies
+    return best[0], best[1], float(np.mean(best[2]))
+
+
+def select_regressor(X, Y, groups, error, names=tuple(REGRESSOR_GRID), rule: str = "min") -> tuple[str, dict, float]:
+    """``(name, hyperparameters, LOO error)`` of the candidate (``names`` x their grids) chosen by ``rule``
+    (:func:`choose_regressor`) on ``(X, Y, groups)``."""
+    if rule not in SELECTION_RULES:
+        raise InputError(f"rule: expected one of {SELECTION_RULES}, got {rule!r}")
+    return choose_regressor(score_regressors(X, Y, groups, error, names), rule)
 
 
 def nested_loo_error(X, Y, groups, error, names, rule: str = "min") -> float:

@@ -72,8 +72,14 @@ def motion_from_descriptor(vector, template: GraspMotion) -> GraspMotion:
     return GraspMotion(poses, template.pose_names, postures, template.frame, template.lift_height, template.hold_time)
 
 
-def functional_point(vector, template: GraspMotion, anchor_H) -> np.ndarray:
+def motion_functional_point(motion: GraspMotion, anchor_H) -> np.ndarray:
     """The grasp's functional point (``anchor_H``: m, hand frame -- the trigger or handle centre carried by
-    the hand) in the descriptor's frame, at the ``grasp`` control pose (m)."""
-    P = motion_from_descriptor(vector, template).pose("grasp")
-    return P[:3, :3] @ np.asarray(anchor_H, float) + P[:3, 3]
+    the hand; None: the hand frame's origin) in the motion's frame, at the ``grasp`` control pose (m)."""
+    P = motion.pose("grasp")
+    a = np.zeros(3) if anchor_H is None else np.asarray(anchor_H, float)
+    return P[:3, :3] @ a + P[:3, 3]
+
+
+def functional_point(vector, template: GraspMotion, anchor_H) -> np.ndarray:
+    """:func:`motion_functional_point` of the descriptor ``vector`` (the descriptor's frame, m)."""
+    return motion_functional_point(motion_from_descriptor(vector, template), anchor_H)

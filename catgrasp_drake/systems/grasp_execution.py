@@ -249,19 +249,17 @@ class MotionPlanner(LeafSystem):
         cloud_W = None
         if self._obstacle_in is not None and self._obstacle_in.HasValue(context):
             cloud_W = points_from_cloud(self._obstacle_in.Eval(context))
-        if not candidates:
-            value.set_value(_PlanCache(self._planning_for(cloud_W).plan(motion, self._params)))
-            return
+        # (motion, its own obstacle points or None: the object_cloud_W port's) in rank order
+        tries = [(c.motion, c.object_points_W if len(c.object_points_W) >= 4 else None) for c in candidates]
         first = None
-        for i, c in enumerate(candidates):
-            points_W = c.object_points_W if len(c.object_points_W) >= 4 else cloud_W
-            plan = self._planning_for(points_W).plan(c.motion, self._params)
+        for i, (m, points_W) in enumerate(tries or [(motion, None)]):
+            plan = self._planning_for(cloud_W if points_W is None else points_W).plan(m, self._params)
             if plan.ok:
                 value.set_value(_PlanCache(dataclasses.replace(plan, candidate=i, tried=i + 1)))
                 return
             if first is None:
                 first = plan
-        value.set_value(_PlanCache(dataclasses.replace(first, tried=len(candidates))))
+        value.set_value(_PlanCache(dataclasses.replace(first, tried=max(1, len(tries)))))
 
     def _planning_for(self, points_W) -> PlanningModel:
         """The planning model with ``points_W`` (N, 3) as the object (>= 4 points and an obstacle model), else

@@ -22,12 +22,12 @@ from pydrake.systems.framework import LeafSystem, ValueProducer
 
 from catgrasp_drake.category_model import CategoryModel
 from catgrasp_drake.errors import CatgraspError, InputError
+from catgrasp_drake.grasping.descriptor import motion_functional_point
 from catgrasp_drake.perception.object_cloud import points_from_cloud
 from catgrasp_drake.prediction import (
     GraspCandidate,
     ShapeHypothesis,
     check_method,
-    functional_point_W,
     grasp_candidates,
     predict_motion,
 )
@@ -93,7 +93,7 @@ class GraspPredictor(LeafSystem):
                                                           AbstractValue.Make(failed_estimate(model.space.q, "")))
         default = model.transfer(np.zeros(model.space.q), frame="world")
         idle = (GraspCandidate(default, np.zeros((0, 3)), 0, 1.0, 1.0,
-                               functional_point_W(default, model.grasp_anchor_H)),)
+                               motion_functional_point(default, model.grasp_anchor_H)),)
         self._candidates = self.DeclareCacheEntry(
             "grasp_candidates", ValueProducer(allocate=AbstractValue.Make(idle).Clone, calc=self._calc_candidates),
             {self.all_input_ports_ticket()})
@@ -122,7 +122,7 @@ class GraspPredictor(LeafSystem):
         motion = self._single(context)
         points = estimate.completed_W if estimate is not None else np.zeros((0, 3))
         value.set_value((GraspCandidate(motion, points, 0, 1.0, 1.0,
-                                        functional_point_W(motion, self._model.grasp_anchor_H)),))
+                                        motion_functional_point(motion, self._model.grasp_anchor_H)),))
 
     def _single(self, context):
         """The method's grasp for the estimate on the x, X_WO, scale (and cloud) ports."""
