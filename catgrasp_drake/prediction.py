@@ -66,13 +66,13 @@ class EstimatorSetup:
     hypotheses: int = 1
 
 
-#: Shape hypotheses of the latent method. On the committed mugs (45 single views, 3 seeded placements
-#: each; out-of-split tuning), the yaw within 10 deg: 24 (1 hypothesis), 24 (2), 26 (3), 26 (4);
-#: each more costs one refine (~35 ms).
+#: Shape hypotheses of the latent method. On the committed instances (3 seeded placements each; out-of-split
+#: tuning, ``benchmarks/bench_posterior.py``), views with the yaw within 10 deg for 1/2/3/4 hypotheses: mugs
+#: 24/24/26/26 of 45, drills 39 of 39 throughout, spray bottles 44/47/47/48 of 51; each more costs one refine.
 POSTERIOR_HYPOTHESES = 3
-#: Temperature (nats) of the hypotheses' weights ``exp(-(E - E_min) / T)``: the likelihood of the right
-#: hypothesis (yaw within 10 deg) is largest at 12-20 on the same tuning set (1: -3.3, 5: -0.88,
-#: 15: -0.49, 40: -0.78 mean log-probability); the EM energy's raw likelihood (T = 1) is far too sure.
+#: Temperature (nats) of the hypotheses' weights ``exp(-(E - E_min) / T)``: the mean log-probability of the
+#: right mug hypotheses (yaw within 10 deg) on the same views is -3.34 at 1, -0.88 at 5, -0.47 at 15,
+#: -0.78 at 40; the EM energy's raw likelihood (T = 1) is far too sure.
 POSTERIOR_TEMPERATURE = 15.0
 #: A grasp is well placed on a hypothesis when its functional point is within this of that
 #: hypothesis' grasp's functional point (m): about the trigger's and handle's half-width.
