@@ -92,6 +92,7 @@ class TrialResult:
     trigger_force_N: float | None = None  # index distal on the trigger, along its travel, end of the press
     in_hand_shift_m: float | None = None  # largest object motion relative to the hand (vs start of the hold)
     in_hand_turn_deg: float | None = None
+    object_shift_mm: float | None = None  # how far the planner's object clearance moved the grasp (mm; 0: clear)
 
     @property
     def realtime_rate(self) -> float:
@@ -275,7 +276,8 @@ def run_grasp_trial(scenario: Scenario, motion_O: GraspMotion, *, meshcat: Meshc
             wall_time_s=time.perf_counter() - wall0, plan_time_s=plan.solve_time_s,
             trigger_force_N=_finite_or_none(verdict.trigger_force_N),
             in_hand_shift_m=_finite_or_none(verdict.in_hand_shift_m),
-            in_hand_turn_deg=_finite_or_none(verdict.in_hand_turn_deg))
+            in_hand_turn_deg=_finite_or_none(verdict.in_hand_turn_deg),
+            object_shift_mm=round(1000.0 * float(np.linalg.norm(plan.object_shift)), 3))
 
     if not plan.ok:
         return result(Verdict(False, False, plan.failure_reason, plan.status), X_WO0, None, 0.0)

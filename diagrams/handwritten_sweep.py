@@ -3,6 +3,7 @@
     python diagrams/handwritten_sweep.py [--categories drill spray_bottle mug] [--workers 2]
                                          [--cache out/handwritten_sweep_cache] [--json out/handwritten_sweep.json]
                                          [--shift DX DY DZ] [--rotate RX RY RZ] [--model FILE]
+                                         [--objects DIR...] [--placements N] [--no-object-clearance]
 
 Each trial uses the category's default scenario (``<category>_default`` in
 ``models/station.scenarios.yaml``) with the object replaced by the instance,
@@ -19,7 +20,20 @@ the learned knowledge's optimum is (on the instances it was learned from).
 Trials run in parallel worker processes through
 :func:`catgrasp_drake.runner.run_tasks` and are cached on disk by (spec, code
 fingerprint), so a re-run only computes what changed. Prints one table row
-per instance (grasp, functional, failure reason) and a summary per category.
+per instance (grasp, functional, failure reason, the in-hand shift and turn,
+and how far the planner's object clearance moved the grasp) and a summary per
+category.
+
+``--objects DIR...`` runs imported objects instead (``catgrasp
+import-object``, or the YCB scans prepared by ``python -m
+catgrasp_drake.data.ycb --out out/ycb``), each with its own category's
+grasp anchored on its own annotation; ``--placements N`` runs each object at
+N seeded random placements (``random_placement``, seeds 0..N-1);
+``--no-object-clearance`` plans without the object clearance (the planner as
+it was before session 9), for a before/after in one command::
+
+    python diagrams/handwritten_sweep.py --objects out/ycb/drill/ycb_035 out/ycb/spray_bottle/ycb_022 \
+        out/ycb/mug/ycb_025 --placements 6 [--no-object-clearance]
 """
 
 from __future__ import annotations
@@ -27,7 +41,6 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from dataclasses import replace
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -36,26 +49,29 @@ CATEGORIES = ("drill", "spray_bottle", "mug")
 
 def sweep_task(spec: dict) -> dict:
     """One trial: ``{"category", "instance"}`` -> JSON-able outcome (module-level: runs in workers)."""
+    from catgrasp_drake.planning.records import PlanParams
     from catgrasp_drake.station.handwritten import load_handwritten_motion, shifted_motion
-    from catgrasp_drake.station.scenario import load_scenario
+    from catgrasp_drake.station.scenario import load_scenario, random_placement, with_instance
     from catgrasp_drake.trial import run_grasp_trial
 
-    category, instance = spec["category"], spec["instance"]
-    base = load_scenario(f"{category}_default")
-    scenario = replace(base, name=f"{category}_default:{instance}", object=replace(base.object, instance=instance))
+    category, instance, model_dir = spec["category"], spec["instance"], spec.get("model_dir")
+    scenario = with_instance(load_scenario(f"{category}_default"), instance, category=category, model_dir=model_dir)
+    if spec.get("seed") is not None:
+        scenario = random_placement(scenario, spec["seed"])
     motion = learned_motion(spec["model"], category, instance) if spec.get("model") else \
-        load_handwritten_motion(category, instance)
+        load_handwritten_motion(category, instance, annotations_dir=model_dir)
     if spec.get("shift") or spec.get("rotate"):
         motion = shifted_motion(motion, category, instance, spec.get("shift") or (0, 0, 0),
-                                spec.get("rotate") or (0, 0, 0))
-    r = run_grasp_trial(scenario, motion)
+                                spec.get("rotate") or (0, 0, 0), annotations_dir=model_dir)
+    params = PlanParams(object_penetration_tol=None) if spec.get("no_object_clearance") else PlanParams()
+    r = run_grasp_trial(scenario, motion, params=params)
     return {
         "grasp": r.grasp_success, "functional": r.functional_success, "reason": r.failure_reason,
         "detail": r.detail, "plan_status": r.plan_status, "rise_m": r.object_rise_m,
         "tilt_deg": r.object_tilt_deg, "hand_links": list(r.hand_links_on_object),
         "sim_time_s": r.sim_time_s, "wall_time_s": r.wall_time_s,
         "trigger_force_N": r.trigger_force_N, "in_hand_shift_m": r.in_hand_shift_m,
-        "in_hand_turn_deg": r.in_hand_turn_deg,
+        "in_hand_turn_deg": r.in_hand_turn_deg, "object_shift_mm": r.object_shift_mm,
     }
 
 
@@ -102,6 +118,13 @@ def main(argv=None) -> int:
                     help="turn every grasp about its anchor region's centre (deg, object-frame x-y-z Euler angles)")
     ap.add_argument("--model", type=Path, help="a trained model: its learned grasp on each of its training "
                                                  "instances instead of the hand-written one (one category)")
+    ap.add_argument("--objects", type=Path, nargs="+", metavar="DIR",
+                    help="imported objects (catgrasp import-object; e.g. out/ycb/drill/ycb_035) instead of the "
+                         "embedded instances; each in its own category")
+    ap.add_argument("--placements", type=int, default=0, metavar="N",
+                    help="N seeded random placements per object (seeds 0..N-1) instead of the scenario's pose")
+    ap.add_argument("--no-object-clearance", action="store_true",
+                    help="plan without the object clearance (PlanParams.object_penetration_tol=None)")
     args = ap.parse_args(argv)
 
     variant = {k: list(v) for k, v in (("shift", args.shift), ("rotate", args.rotate)) if v and any(v)}
@@ -115,14 +138,28 @@ def main(argv=None) -> int:
         model = CategoryModel.load(args.model, category=args.categories[0])
         instances = {args.categories[0]: list(model.instances)}
         variant |= {"model": str(args.model), "model_sha256": file_sha256(args.model)}
-    specs = [{"category": c, "instance": i, **variant} for c in args.categories for i in instances[c]
-             if not args.instances or i in args.instances]
+    if args.no_object_clearance:
+        variant["no_object_clearance"] = True
+    if args.objects:
+        if args.model is not None:
+            ap.error("--objects and --model: a model's learned grasps are for its own training instances")
+        from catgrasp_drake.data.dataset import imported_object
+
+        objects = [(*imported_object(d), str(d)) for d in args.objects]
+        args.categories = [c for c in CATEGORIES if any(o[0] == c for o in objects)]
+        targets = [(c, i, {"model_dir": d}) for c, i, d in objects]
+    else:
+        targets = [(c, i, {}) for c in args.categories for i in instances[c]
+                   if not args.instances or i in args.instances]
+    seeds = [{"seed": k} for k in range(args.placements)] or [{}]
+    specs = [{"category": c, "instance": i, **where, **seed, **variant} for c, i, where in targets for seed in seeds]
 
     def progress(outcome, done, total):
         r = outcome.result
         what = "error" if r.get("status") == "error" else ("ok" if r.get("functional") else r.get("reason"))
         cached = " (cached)" if outcome.cached else ""
-        sys.stderr.write(f"[{done}/{total}] {outcome.spec['instance']}: {what}{cached}\n")
+        seed = f" seed {outcome.spec['seed']}" if "seed" in outcome.spec else ""
+        sys.stderr.write(f"[{done}/{total}] {outcome.spec['instance']}{seed}: {what}{cached}\n")
 
     outcomes = run_tasks(sweep_task, specs, cache_dir=None if args.no_cache else args.cache,
                          code_version=code_version(), workers=args.workers, progress=progress)
@@ -136,15 +173,17 @@ def main(argv=None) -> int:
         if not sel:
             continue
         out.write(f"\n{c}\n{'instance':18s} {'grasp':6s} {'functional':10s} {'reason':26s} {'rise(m)':>8s} "
-                  f"{'tilt':>6s} {'F_trig(N)':>9s} {'shift(mm)':>9s} {'turn':>5s} {'wall(s)':>7s}\n")
+                  f"{'tilt':>6s} {'F_trig(N)':>9s} {'shift(mm)':>9s} {'turn':>5s} {'moved(mm)':>9s} {'wall(s)':>7s}\n")
         for r in sel:
             if r.get("status") == "error":
-                out.write(f"{r['instance']:18s} {'-':6s} {'-':10s} error: {r['error'][:60]}\n")
+                out.write(f"{r['instance']:18s} {'-':6s} {'-':10s} error: {r['error'][:60]}\n")  # noqa: E501
                 continue
-            out.write(f"{r['instance']:18s} {str(r['grasp']):6s} {str(r['functional']):10s} "
+            name = r["instance"] + (f" #{r['seed']}" if "seed" in r else "")
+            out.write(f"{name:18s} {str(r['grasp']):6s} {str(r['functional']):10s} "
                       f"{(r['reason'] or '-'):26s} {r['rise_m']:8.3f} {r['tilt_deg']:6.1f} "
                       f"{_fmt(r.get('trigger_force_N'), 9, 1)} {_fmt(r.get('in_hand_shift_m'), 9, 1, 1000)} "
-                      f"{_fmt(r.get('in_hand_turn_deg'), 5, 1)} {r['wall_time_s']:7.1f}\n")
+                      f"{_fmt(r.get('in_hand_turn_deg'), 5, 1)} {_fmt(r.get('object_shift_mm'), 9, 1)} "
+                      f"{r['wall_time_s']:7.1f}\n")
         n = len(sel)
         g = sum(bool(r.get("grasp")) for r in sel)
         f = sum(bool(r.get("functional")) for r in sel)

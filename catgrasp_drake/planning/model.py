@@ -10,21 +10,27 @@ on a fresh scratch context.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
+import trimesh
 from pydrake.geometry import AddContactMaterial, Convex, ProximityProperties
 from pydrake.math import RigidTransform
 from pydrake.multibody.plant import AddMultibodyPlant, CoulombFriction, MultibodyPlant
 from pydrake.multibody.tree import ModelInstanceIndex, SpatialInertia, UnitInertia
 from pydrake.systems.framework import DiagramBuilder
 
+from catgrasp_drake.core.clearance import SignedDistanceGrid
+from catgrasp_drake.data.dataset import instance_mesh_path
+from catgrasp_drake.data.meshes import read_mesh
 from catgrasp_drake.grasping.motion import GraspMotion
-from catgrasp_drake.planning.planner import plan_grasp
+from catgrasp_drake.planning.planner import ObjectSurface, plan_grasp
 from catgrasp_drake.planning.records import GraspPlan, PlanParams
 from catgrasp_drake.robot.models import add_arm_and_hand, load_hand_postures, make_parser, set_hand_default_posture
 from catgrasp_drake.station.builder import StationHandles, add_table, plant_config, posture_category
-from catgrasp_drake.station.scenario import Scenario
+from catgrasp_drake.station.scenario import ObjectSpec, Scenario
 
 
 @dataclass
@@ -44,12 +50,19 @@ class PlanningModel:
     table: ModelInstanceIndex
     q_arm_start: np.ndarray
     obstacle: ModelInstanceIndex | None = None
+    object_surface: ObjectSurface | None = None
 
     @classmethod
     def of_station(cls, diagram, station: StationHandles) -> "PlanningModel":
-        """The built ``diagram`` holding ``station`` as a planning model; its obstacle is the station's true object."""
+        """The built ``diagram`` holding ``station`` as a planning model; its obstacle is the station's true object,
+        whose surface (its mesh) the object clearance checks the grasp against."""
+        scenario = station.scenario
+        surface = None
+        mesh_path = object_mesh_path(scenario.object)
+        if mesh_path is not None:
+            surface = ObjectSurface(true_object_field(str(mesh_path)), scenario.X_WO())
         return cls(diagram, station.plant, station.scene_graph, station.arm, station.hand, station.table,
-                   np.asarray(station.scenario.arm_q_home, float), station.object_instance)
+                   np.asarray(scenario.arm_q_home, float), station.object_instance, surface)
 
     def plan(self, motion_W: GraspMotion, params: PlanParams = PlanParams()) -> GraspPlan:
         """:func:`~catgrasp_drake.planning.planner.plan_grasp` of ``motion_W`` on a fresh scratch context."""
@@ -57,7 +70,32 @@ class PlanningModel:
         return plan_grasp(self.plant, self.plant.GetMyMutableContextFromRoot(ctx), self.scene_graph,
                           self.scene_graph.GetMyMutableContextFromRoot(ctx), arm=self.arm, hand=self.hand,
                           object_instance=self.obstacle, table=self.table, motion_W=motion_W,
-                          q_arm_start=self.q_arm_start, params=params)
+                          q_arm_start=self.q_arm_start, params=params, object_surface=self.object_surface)
+
+
+#: Surface samples of a true object's mesh for its signed-distance field: ~1.3 mm apart on a drill, dense
+#: enough that the field's closing keeps a mug handle's loop open; grid voxel (m).
+SURFACE_SAMPLES = 30000
+SURFACE_VOXEL = 0.002
+
+
+def object_mesh_path(spec: ObjectSpec) -> Path | None:
+    """The mesh file (canonical frame O) of a data-set or imported object; None for primitives."""
+    if spec.primitive is not None or spec.instance is None:
+        return None
+    if spec.model_dir is not None:
+        path = Path(spec.model_dir) / f"{spec.instance}.obj"
+        return path if path.is_file() else None
+    return instance_mesh_path(spec.category, spec.instance)
+
+
+@functools.lru_cache(maxsize=16)
+def true_object_field(mesh_path: str) -> SignedDistanceGrid:
+    """The signed-distance field (frame O) of the object mesh at ``mesh_path`` (cached per process:
+    every trial on an object plans against the same field)."""
+    mesh = read_mesh(mesh_path)
+    points, _ = trimesh.sample.sample_surface(mesh, SURFACE_SAMPLES, seed=0)
+    return SignedDistanceGrid.from_surface_points(points, SURFACE_VOXEL)
 
 
 def make_planning_model(scenario: Scenario, obstacle_W=None) -> PlanningModel:

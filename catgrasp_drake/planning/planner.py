@@ -4,6 +4,11 @@
 ``InverseKinematics`` (SNOPT when available) on a planning scene
 (:mod:`catgrasp_drake.planning.scene`):
 
+- object clearance (:func:`clear_object`), where the object's surface is
+  known: a preshaped hand that would lie more than ``object_penetration_tol``
+  inside the object at the grasp is moved out by the smallest translation
+  (pregrasp and grasp together, at most ``max_object_shift``), so the reach
+  does not knock the object over before the fingers close;
 - table clearance (:func:`clear_table`): the pregrasp and grasp poses are
   raised (by at most ``max_table_raise``) until the preshaped hand's
   collision primitives and the wrist flange it is mounted on are
@@ -57,6 +62,7 @@ start configuration with the hand open. Nothing raises into the simulation.
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass
 
 import numpy as np
 from pydrake.geometry import CollisionFilterDeclaration
@@ -64,6 +70,7 @@ from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.multibody.plant import MultibodyPlant
 from pydrake.multibody.tree import JacobianWrtVariable, ModelInstanceIndex
 
+from catgrasp_drake.core.clearance import SignedDistanceGrid, clearance_shift
 from catgrasp_drake.errors import InputError
 from catgrasp_drake.grasping.motion import GraspMotion
 from catgrasp_drake.planning.records import GraspPlan, PlanParams, Timeline, hold_plan
@@ -71,6 +78,7 @@ from catgrasp_drake.planning.scene import (
     PlanningScene,
     collision_filters,
     collisions,
+    hand_surface_points_H,
     min_distance,
     path_collides,
     planning_scene,
@@ -105,9 +113,8 @@ def interpolate_poses(X_A: RigidTransform, X_B: RigidTransform, n: int) -> list[
 
 
 # ----------------------------------------------------------------------------- table clearance
-def clear_table(c: PlanningScene, motion_W: GraspMotion, params: PlanParams) -> dict[str, RigidTransform]:
-    """The pregrasp and grasp poses raised until the hand clears the table, checked against the arm's reach."""
-    X = {name: RigidTransform(motion_W.pose(name)) for name in ("pregrasp", "grasp")}
+def clear_table(c: PlanningScene, X: dict[str, RigidTransform], params: PlanParams) -> dict[str, RigidTransform]:
+    """The pregrasp and grasp poses ``X`` raised until the hand clears the table, checked against the arm's reach."""
     raise_m = table_raise(c, list(X.values()), params.table_clearance)
     if raise_m > params.max_table_raise:
         raise PlanFailure(f"collision: hand {1000 * (raise_m - params.table_clearance):.0f} mm into the table")
@@ -116,6 +123,41 @@ def clear_table(c: PlanningScene, motion_W: GraspMotion, params: PlanParams) -> 
         if np.linalg.norm(X_WH.translation() - c.shoulder_W) > params.max_reach:
             raise PlanFailure(f"unreachable: {name}")
     return X
+
+
+# ----------------------------------------------------------------------------- object clearance
+@dataclass(frozen=True)
+class ObjectSurface:
+    """The object as the planner knows its surface: ``field`` (signed distance, positive inside) in the
+    object's frame O, and ``X_WO`` (4x4) its pose in the world."""
+
+    field: SignedDistanceGrid
+    X_WO: np.ndarray
+
+
+def clear_object(c: PlanningScene, X: dict[str, RigidTransform], surface: ObjectSurface | None,
+                 params: PlanParams) -> tuple[dict[str, RigidTransform], np.ndarray]:
+    """``(poses, shift_W)``: the pregrasp and grasp moved together by the smallest translation (m, W) that
+    brings the preshaped hand at the grasp to at most ``params.object_penetration_tol`` inside the object.
+
+    A grasp whose preshaped hand would already lie inside the object sweeps into it on the reach and
+    knocks it before the fingers close (a real drill's handle thicker than the generator's meets the
+    thumb). Unchanged when ``surface`` is None, the check is off or the hand is clear; a hand that needs
+    more than ``params.max_object_shift`` is refused (``collision: grasp``).
+    """
+    if surface is None or params.object_penetration_tol is None:
+        return X, np.zeros(3)
+    X_OW = np.linalg.inv(surface.X_WO)
+    M = X_OW @ X["grasp"].GetAsMatrix4()
+    p_O = hand_surface_points_H(c) @ M[:3, :3].T + M[:3, 3]
+    r = clearance_shift(p_O, surface.field, params.object_penetration_tol, params.max_object_shift)
+    if not r.ok:
+        raise PlanFailure(f"collision: grasp (the preshaped hand {1000 * r.depth_before:.0f} mm inside the object; "
+                          f"no move within {1000 * params.max_object_shift:.0f} mm clears it)")
+    shift_W = surface.X_WO[:3, :3] @ r.shift
+    if not shift_W.any():
+        return X, shift_W
+    return {name: RigidTransform(X_WH.rotation(), X_WH.translation() + shift_W) for name, X_WH in X.items()}, shift_W
 
 
 # ----------------------------------------------------------------------------- pregrasp and approach
@@ -360,14 +402,16 @@ def timeline_and_knots(q_arm_start: np.ndarray, postures: tuple[np.ndarray, np.n
 # ----------------------------------------------------------------------------- planner
 def plan_grasp(plant: MultibodyPlant, plant_context, scene_graph, sg_context, *, arm: ModelInstanceIndex,
                hand: ModelInstanceIndex, object_instance: ModelInstanceIndex | None, table: ModelInstanceIndex,
-               motion_W: GraspMotion, q_arm_start, params: PlanParams = PlanParams()) -> GraspPlan:
+               motion_W: GraspMotion, q_arm_start, params: PlanParams = PlanParams(),
+               object_surface: ObjectSurface | None = None) -> GraspPlan:
     """Plan the joint trajectories executing ``motion_W`` (poses in the WORLD frame).
 
     ``plant_context``/``sg_context`` must be a SCRATCH context of the diagram
     holding ``plant`` and ``scene_graph`` (its positions and collision
     filters are modified). ``object_instance`` None: a planning model without
-    the object (robot vs table only). Never raises for unreachable or colliding poses:
-    the returned plan's ``status`` says what failed.
+    the object (robot vs table only). ``object_surface``: the object's surface,
+    for :func:`clear_object` (None: not checked). Never raises for unreachable
+    or colliding poses: the returned plan's ``status`` says what failed.
     """
     if not isinstance(motion_W, GraspMotion) or motion_W.frame != "world":
         raise InputError("plan_grasp: needs a GraspMotion in the world frame (motion.in_world(X_WO))")
@@ -378,7 +422,9 @@ def plan_grasp(plant: MultibodyPlant, plant_context, scene_graph, sg_context, *,
     c = planning_scene(plant, plant_context, scene_graph, sg_context, arm=arm, hand=hand,
                        object_instance=object_instance, table=table, q_arm_start=q_arm_start, q_hand=q_pre)
     try:
-        X = clear_table(c, motion_W, params)
+        X, shift_W = clear_object(c, {name: RigidTransform(motion_W.pose(name)) for name in ("pregrasp", "grasp")},
+                                  object_surface, params)
+        X = clear_table(c, X, params)
         q_pre_arm, approach_knots = plan_approach(c, X["pregrasp"], q_arm_start, params)
         reach = plan_reach(c, X["pregrasp"], X["grasp"], q_pre_arm, params)
         lift = plan_lift(c, X["grasp"], reach[-1], motion_W.lift_height, params)
@@ -391,4 +437,5 @@ def plan_grasp(plant: MultibodyPlant, plant_context, scene_graph, sg_context, *,
     timeline, times, qa, qh, names, va = timeline_and_knots(
         q_arm_start, (q_open, q_pre, q_closed, q_press), approach_knots, reach, lift, shake, motion_W.hold_time,
         params)
-    return GraspPlan("ok", timeline, times, qa, qh, names, time.perf_counter() - t_start, va)
+    return GraspPlan("ok", timeline, times, qa, qh, names, time.perf_counter() - t_start, va,
+                     object_shift=tuple(float(v) for v in shift_W))

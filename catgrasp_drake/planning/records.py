@@ -53,6 +53,13 @@ class PlanParams:
     # table top; a perceived grasp a few mm too low would otherwise put the palm into the table.
     table_clearance: float = 0.004  # m
     max_table_raise: float = 0.03  # m; a hand lower than this under the clearance is refused
+    # Object clearance (planner.clear_object), where the planning model knows the object's surface: the
+    # preshaped hand at the grasp pose may lie this deep inside the object (m; the deepest any hand-written
+    # grasp goes on the committed instances is 3.5 mm); deeper, the pregrasp and grasp are moved by the
+    # smallest translation that brings it back, at most max_object_shift, else the plan is refused.
+    # None: no check.
+    object_penetration_tol: float | None = 0.004
+    max_object_shift: float = 0.02  # m
 
 
 @dataclass(frozen=True)
@@ -86,7 +93,9 @@ class GraspPlan:
     shape-preserving cubic's through those knots alone (the shake's knots
     carry their exact velocities). ``candidate``: which of the grasp
     candidates given to the planner this plan executes (0: the first, or the
-    only one); ``tried``: how many were planned to get it.
+    only one); ``tried``: how many were planned to get it. ``object_shift``:
+    the translation (m, W) the object clearance moved the pregrasp and grasp
+    by (zero when the hand was clear, or the object's surface unknown).
     """
 
     status: str
@@ -99,6 +108,7 @@ class GraspPlan:
     v_arm: np.ndarray | None = None
     candidate: int = 0
     tried: int = 1
+    object_shift: tuple[float, float, float] = (0.0, 0.0, 0.0)  # m, W: the object clearance's move of the grasp
 
     @property
     def ok(self) -> bool:

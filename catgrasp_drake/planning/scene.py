@@ -41,6 +41,7 @@ class PlanningScene:
     q_full: np.ndarray  # the fixed configuration of everything but the arm
     robot_geoms: GeometrySet
     carried_ids: list  # proximity geometry ids rigid with H: the hand's (in q_full) and the arm's last link
+    hand_ids: list  # the hand's proximity geometry ids
     object_geoms: GeometrySet
     table_geoms: GeometrySet
     table_ids: list
@@ -76,6 +77,7 @@ def planning_scene(plant: MultibodyPlant, plant_context, scene_graph, sg_context
         robot_geoms=geometry_set(plant, scene_graph, [arm, hand]),
         carried_ids=geometry_ids(plant, scene_graph, [hand]) + body_geometry_ids(
             scene_graph, plant.GetJointByName(ARM_JOINTS[-1], arm).child_body()),
+        hand_ids=geometry_ids(plant, scene_graph, [hand]),
         object_geoms=geometry_set(plant, scene_graph, object_instances),
         table_geoms=geometry_set(plant, scene_graph, [table]),
         table_ids=geometry_ids(plant, scene_graph, [table]), shoulder_W=shoulder_W)
@@ -247,3 +249,63 @@ def table_raise(c: PlanningScene, poses_WH: list[RigidTransform], clearance: flo
             if z is not None:
                 lowest = min(lowest, z)
     return max(0.0, table_top + clearance - lowest) if np.isfinite(lowest) else 0.0
+
+
+# ----------------------------------------------------------------------------- object clearance
+def shape_surface_points(shape, spacing: float) -> np.ndarray | None:
+    """Points (K, 3) about ``spacing`` (m) apart on the surface of a primitive ``shape``, in its own frame
+    (Drake's conventions: capsules and cylinders along z, boxes centred); None for other shapes."""
+    def along(length):  # sample positions over [-length/2, length/2]
+        return np.linspace(-length / 2, length / 2, max(2, int(np.ceil(length / spacing)) + 1))
+
+    def ring(radius, z, count):
+        a = np.linspace(0.0, 2.0 * np.pi, count, endpoint=False)
+        return np.stack([radius * np.cos(a), radius * np.sin(a), np.full(count, z)], axis=1)
+
+    def sphere(radius, centre_z=0.0, sign=0):
+        n = max(8, int(np.ceil(4.0 * np.pi * radius ** 2 / spacing ** 2)))
+        k = np.arange(n) + 0.5
+        z = 1.0 - 2.0 * k / n
+        phi = np.pi * (1.0 + 5.0 ** 0.5) * k
+        u = np.stack([np.sqrt(1 - z ** 2) * np.cos(phi), np.sqrt(1 - z ** 2) * np.sin(phi), z], axis=1)
+        if sign:
+            u = u[sign * u[:, 2] >= 0]
+        return radius * u + [0.0, 0.0, centre_z]
+
+    if isinstance(shape, Sphere):
+        return sphere(shape.radius())
+    if isinstance(shape, (Capsule, Cylinder)):
+        r, half = shape.radius(), shape.length() / 2
+        count = max(8, int(np.ceil(2.0 * np.pi * r / spacing)))
+        side = np.vstack([ring(r, z, count) for z in along(2 * half)])
+        if isinstance(shape, Capsule):
+            return np.vstack([side, sphere(r, half, 1), sphere(r, -half, -1)])
+        caps = [ring(rr, z, max(4, int(np.ceil(2.0 * np.pi * rr / spacing))))
+                for z in (-half, half) for rr in np.linspace(0.0, r, max(2, int(np.ceil(r / spacing)) + 1))[1:]]
+        return np.vstack([side] + caps)
+    if isinstance(shape, Box):
+        size = np.array([shape.width(), shape.depth(), shape.height()])
+        out = []
+        for axis in range(3):
+            a, b = [i for i in range(3) if i != axis]
+            A, B = (m.ravel() for m in np.meshgrid(along(size[a]), along(size[b])))
+            for sign in (-1.0, 1.0):
+                face = np.zeros((len(A), 3))
+                face[:, a], face[:, b], face[:, axis] = A, B, sign * size[axis] / 2
+                out.append(face)
+        return np.vstack(out)
+    return None
+
+
+def hand_surface_points_H(c: PlanningScene, spacing: float = 0.003) -> np.ndarray:
+    """Points (N, 3) on the hand's collision geometry in its planning posture (``c.q_full``), in frame H (m)."""
+    inspector = c.scene_graph.model_inspector()
+    query = query_at(c, c.q_full[c.arm_q_idx])
+    X_HW = c.frame_H.CalcPoseInWorld(c.plant_context).inverse().GetAsMatrix4()
+    out = []
+    for g in c.hand_ids:
+        p_G = shape_surface_points(inspector.GetShape(g), spacing)
+        if p_G is not None:
+            X_HG = X_HW @ query.GetPoseInWorld(g).GetAsMatrix4()
+            out.append(p_G @ X_HG[:3, :3].T + X_HG[:3, 3])
+    return np.vstack(out) if out else np.zeros((0, 3))

@@ -195,3 +195,48 @@ def test_the_shake_moves_the_hand_base_vertically_with_its_orientation_fixed(dri
     for j, name in enumerate(HAND_ACTUATED_JOINTS):
         want = limits.get(name, plan.q_hand[i_hold][j])
         assert plan.q_hand[i_end][j] == pytest.approx(want)
+
+
+# ----------------------------------------------------------------------------- object clearance
+@pytest.fixture(scope="module")
+def drill_station():
+    from catgrasp_drake.trial import trial_diagram
+
+    scenario = load_scenario("drill_default")
+    return scenario, trial_diagram(scenario)
+
+
+def _pushed_in(motion_W: GraspMotion, depth: float) -> GraspMotion:
+    """``motion_W`` moved ``depth`` (m) along its grasp's approach direction (H's +y: out of the palm)."""
+    poses = motion_W.poses.copy()
+    poses[:, :3, 3] += depth * motion_W.pose("grasp")[:3, 1]
+    return dataclasses.replace(motion_W, poses=poses)
+
+
+def test_the_true_object_planner_moves_a_hand_pushed_into_the_handle_back_out(drill_station):
+    from catgrasp_drake.trial import plan_for
+
+    scenario, td = drill_station
+    motion_W = load_handwritten_motion("drill", "drill_00").in_world(scenario.X_WO())
+    as_written = plan_for(td, motion_W)
+    assert as_written.ok and not any(as_written.object_shift)  # the hand-written grasp is clear of drill_00
+    pushed = _pushed_in(motion_W, 0.03)  # the palm stands ~2 cm off the handle as written
+    plan = plan_for(td, pushed)
+    assert plan.ok
+    shift = np.asarray(plan.object_shift)
+    palm_W = pushed.pose("grasp")[:3, 1]
+    # out of the handle, against the push, by most of it (the tolerance lets the hand stay 4 mm in)
+    assert 0.006 < np.linalg.norm(shift) < 0.02
+    assert shift @ palm_W < -0.6 * np.linalg.norm(shift)
+    off = plan_for(td, pushed, PlanParams(object_penetration_tol=None))
+    assert off.ok and not any(off.object_shift)
+
+
+def test_a_hand_deep_inside_the_object_is_refused(drill_station):
+    from catgrasp_drake.trial import plan_for
+
+    scenario, td = drill_station
+    motion_W = load_handwritten_motion("drill", "drill_00").in_world(scenario.X_WO())
+    plan = plan_for(td, _pushed_in(motion_W, 0.03), PlanParams(max_object_shift=0.003))
+    assert plan.status.startswith("collision: grasp (the preshaped hand")
+    assert plan.failure_reason == "collision_before_closing"
