@@ -20,6 +20,7 @@ each stage, and judges the outcome with the station's judge.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import time
 from dataclasses import asdict, dataclass, field
@@ -50,7 +51,17 @@ from catgrasp_drake.systems.shape_estimator import LatentShapeEstimator, ShapeEs
 from catgrasp_drake.trial import judge_spec, pose_tuple, simulate_and_judge
 from catgrasp_drake.viz.meshcat_tools import COLORS, draw_cloud, draw_triad
 
-VIEWS = ("single", "full")
+#: "single": one camera, the visibility-aware fit (the benchmark's measure); "active": the same, and a second
+#: camera's view merged in when the first view leaves the object's yaw open (``systems.shape_estimator.
+#: yaw_ambiguous``); "two": both views always; "full": FULL_VIEW_CAMERAS cameras on a ring, merged.
+VIEWS = ("single", "active", "two", "full")
+#: The views with a second camera, and the estimator's policy for it.
+SECOND_VIEW_POLICY = {"active": "ambiguous", "two": "always"}
+#: The second camera: the first turned this far (deg, counter-clockwise seen from above) about the vertical
+#: through the point it looks at -- same distance, same height. +90 and -90 were compared on the committed
+#: mugs with the first, visibility-free merged fit (``python benchmarks/bench_second_view.py --azimuths 90 -90
+#: --no-visibility``: yaw within 10 deg on 42/45 and 31/45 views with both views always).
+SECOND_VIEW_AZIMUTH_DEG = 90.0
 #: Cameras of the "full" view: on a ring around the object, this far (m) and this high (deg).
 FULL_VIEW_CAMERAS = 4
 FULL_VIEW_DISTANCE = 0.75
@@ -70,6 +81,19 @@ def ring_cameras(scenario: Scenario, n: int = FULL_VIEW_CAMERAS, distance: float
         cams.append(CameraSpec(name=f"ring{k}", look_at_eye=tuple(eye), look_at_target=tuple(target), width=base.width,
                                height=base.height, fov_y_deg=base.fov_y_deg, depth_range=base.depth_range))
     return tuple(cams)
+
+
+def second_camera(first: CameraSpec, azimuth_deg: float = SECOND_VIEW_AZIMUTH_DEG) -> CameraSpec:
+    """The camera ``first`` turned ``azimuth_deg`` about the vertical through its target (same distance, height,
+    intrinsics), named "second_view"."""
+    X_WC = first.X_WC_matrix()
+    eye = X_WC[:3, 3]
+    target = np.asarray(first.look_at_target if first.look_at_target is not None else eye + 0.8 * X_WC[:3, 2], float)
+    a = np.radians(azimuth_deg)
+    R = np.array([[np.cos(a), -np.sin(a), 0.0], [np.sin(a), np.cos(a), 0.0], [0.0, 0.0, 1.0]])
+    eye2 = target + R @ (eye - target)
+    return dataclasses.replace(first, name="second_view", X_WC=None, look_at_eye=tuple(float(v) for v in eye2),
+                               look_at_target=tuple(float(v) for v in target))
 
 
 class CloudMerger(LeafSystem):
@@ -201,8 +225,10 @@ def make_transfer_diagram(scenario: Scenario, model: CategoryModel, meshcat: Mes
     """The station with the transfer systems wired in (module docstring); see :class:`TransferDiagram`.
 
     ``view`` "single": the scenario's camera ``camera`` (default its first)
-    with the visibility-aware fit; "full": ``FULL_VIEW_CAMERAS`` cameras on a
-    ring around the object, clouds merged, no visibility model.
+    with the visibility-aware fit; "active" / "two": the same, and a second
+    camera (:func:`second_camera`) whose view the estimator merges in when
+    the first leaves the yaw open / always; "full": ``FULL_VIEW_CAMERAS``
+    cameras on a ring around the object, clouds merged, no visibility model.
     ``min_confidence``: below it the motion is refused (status "refused: ...").
     ``method`` (:mod:`catgrasp_drake.prediction`): "latent" (this project),
     or a baseline -- "paper" (no visibility model), "rigid", "cpd", "nearest"
@@ -221,20 +247,33 @@ def make_transfer_diagram(scenario: Scenario, model: CategoryModel, meshcat: Mes
         scenario = scenario.replace(cameras=ring_cameras(scenario))
     elif not scenario.cameras:
         raise InputError(f"scenario {scenario.name!r} has no camera; a single view needs one")
+    elif view in SECOND_VIEW_POLICY:
+        first = [c for c in scenario.cameras if c.name == (camera or scenario.cameras[0].name)]
+        if not first:
+            raise InputError(f"camera {camera!r} not in scenario {scenario.name!r}; "
+                             f"cameras: {sorted(c.name for c in scenario.cameras)}")
+        scenario = scenario.replace(cameras=(first[0], second_camera(first[0])))
     builder = DiagramBuilder()
     h = add_station(builder, scenario, meshcat)
     space = rigid_space(model.space) if setup.rigid else model.space
     if setup.hypotheses > 1:
         inference_kwargs = {"hypotheses": setup.hypotheses} | inference_kwargs
     estimator = builder.AddNamedSystem("shape_estimator", LatentShapeEstimator(
-        space, scenario.table.pose.matrix(), yaw_candidates=yaw_candidates, **inference_kwargs))
-    if view == "single":
+        space, scenario.table.pose.matrix(), yaw_candidates=yaw_candidates,
+        second_view=SECOND_VIEW_POLICY.get(view, "never"), **inference_kwargs))
+    if view in SECOND_VIEW_POLICY:
+        builder.Connect(h.object_clouds["second_view"].GetOutputPort("object_cloud_W"),
+                        estimator.GetInputPort("second_cloud_W"))
+    if view != "full":
         name = camera or scenario.cameras[0].name
         if name not in h.cameras:
             raise InputError(f"camera {name!r} not in scenario {scenario.name!r}; cameras: {sorted(h.cameras)}")
         cloud_port = h.object_clouds[name].GetOutputPort("object_cloud_W")
         if setup.visibility:
             builder.Connect(h.cameras[name].body_pose_in_world_output_port(), estimator.GetInputPort("X_WC"))
+            if view in SECOND_VIEW_POLICY:
+                builder.Connect(h.cameras["second_view"].body_pose_in_world_output_port(),
+                                estimator.GetInputPort("second_X_WC"))
     else:
         merger = builder.AddNamedSystem("cloud_merger", CloudMerger(len(h.cameras)))
         for i, name in enumerate(h.cameras):
@@ -307,6 +346,8 @@ class TransferResult:
     #: (rank of the executed grasp among the candidates; 0 = the first choice), ``tried`` (candidates
     #: planned), ``hypothesis`` (the executed grasp's fit in energy order; 0 = the MAP fit), ``support``.
     posterior: dict = field(default_factory=dict)
+    #: Camera views the estimate fitted: 1, or 2 when the "active"/"two" view merged the second camera's in.
+    views_used: int = 1
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -355,7 +396,7 @@ def run_transfer(td: TransferDiagram, *, record_html=None, return_context: bool 
     base = dict(category=td.model.category, instance=h.scenario.object.instance, view=td.view,
                 plan_status=plan.status, confidence=float(estimate.confidence), scale=float(estimate.scale),
                 X_WO_estimated=pose_tuple(estimate.X_WO), X_WO_true=pose_tuple(X_true),
-                num_observed_points=int(len(observed)), posterior=posterior)
+                num_observed_points=int(len(observed)), posterior=posterior, views_used=int(estimate.views))
     if not plan.ok:
         timings["total"] = time.perf_counter() - t_all
         result = TransferResult(grasp_success=False, functional_success=False, failure_reason=plan.failure_reason,
@@ -384,8 +425,8 @@ def observe(scenario: Scenario, view: str = "single", camera: str | None = None)
     the visibility-aware fit); "full": ``FULL_VIEW_CAMERAS`` ring cameras,
     clouds merged, no camera position. Renders once, simulates nothing.
     """
-    if view not in VIEWS:
-        raise InputError(f"view: expected one of {VIEWS}, got {view!r}")
+    if view not in ("single", "full"):
+        raise InputError(f"view: expected 'single' or 'full', got {view!r}")
     if view == "full":
         scenario = scenario.replace(cameras=ring_cameras(scenario))
     station = make_station(scenario)

@@ -325,6 +325,7 @@ def benchmark_trial_task(spec: dict) -> dict:
         "rise_m": round(float(result.object_rise_m), 6), "tilt_deg": round(float(result.object_tilt_deg), 4),
         "judge": measured, "timings": timings, "model_sha256": spec["model_sha256"],
         "posterior": {k: (round(v, 6) if isinstance(v, float) else v) for k, v in result.posterior.items()},
+        "views_used": int(result.views_used),
     }
 
 

@@ -228,7 +228,10 @@ class _Problem:
     def visible(self, T):
         if self.camera is None:
             return np.ones(self.M, dtype=bool)
-        return hidden_point_removal(T, self.camera, radius_factor=self.radius_factor)
+        vis = hidden_point_removal(T, self.camera[0], radius_factor=self.radius_factor)
+        for c in self.camera[1:]:  # several views: visible from any of the cameras
+            vis = vis | hidden_point_removal(T, c, radius_factor=self.radius_factor)
+        return vis
 
     def log_uniform(self, n_vis, sigma2):
         if self.w <= 0.0:
@@ -378,6 +381,17 @@ def model_spacing(space: ShapeSpace) -> float:
     return float(d[:, 1].mean())
 
 
+def camera_positions(camera_position) -> np.ndarray:
+    """``camera_position`` (3,) or (K, 3) as a (K, 3) array of finite positions, or InputError."""
+    try:
+        one = np.ndim(camera_position) == 1
+    except ValueError:  # ragged nesting: as_points names it
+        one = False
+    if one:
+        return vector3(camera_position, "camera_position")[None]
+    return as_points(camera_position, "camera_position", min_points=1)
+
+
 def _confidence(completed, visible, O):
     d_model, _ = cKDTree(completed).query(completed, k=2)
     tau = max(float(d_model[:, 1].mean()), 1e-6)
@@ -421,7 +435,8 @@ def infer_latent_pose(
     """Fit latent x and a similarity (R, t, s) of ``space`` to ``observed`` (N, 3), metres.
 
     ``camera_position`` (3,) in the observation frame turns on the
-    visibility-aware E-step. ``yaw_candidates``: None (one start), an int n
+    visibility-aware E-step; (K, 3): the observation merges K views, and a
+    model point is visible when any of the K cameras sees it. ``yaw_candidates``: None (one start), an int n
     (n yaws evenly spaced in [0, 2 pi)) or a list of yaws (rad).
     ``initial_pose``: 4x4 (may contain a scale) or ``(R, t, s)``; its rotation
     is the base of the yaw search; without it the observation frame is
@@ -460,7 +475,7 @@ def infer_latent_pose(
     if not isinstance(space, ShapeSpace):
         raise InputError(f"space: expected a ShapeSpace, got {type(space).__name__}")
     O = as_points(observed, "observed", min_points=3, check_units=True)
-    camera = None if camera_position is None else vector3(camera_position, "camera_position")
+    camera = None if camera_position is None else camera_positions(camera_position)
     w = outlier_weight(w)
     prior = non_negative(prior, "prior")
     try:

@@ -32,11 +32,12 @@ from pydrake.math import RigidTransform
 from pydrake.perception import PointCloud
 from pydrake.systems.framework import EventStatus, LeafSystem
 
-from catgrasp_drake.core.inference import InferenceResult, infer_latent_pose, model_spacing
+from catgrasp_drake.core.inference import InferenceResult, camera_positions, infer_latent_pose, model_spacing
 from catgrasp_drake.core.shape_space import ShapeSpace
 from catgrasp_drake.core.validation import non_negative, real_array, vector3
 from catgrasp_drake.errors import CatgraspError, InputError
 from catgrasp_drake.perception.object_cloud import cloud_from_points, points_from_cloud, voxel_grid
+from catgrasp_drake.prediction import POSTERIOR_TEMPERATURE, hypothesis_weights
 
 #: Fewer observed points than this: no estimate ("no object in view").
 MIN_OBSERVED_POINTS = 30
@@ -45,6 +46,18 @@ MIN_OBSERVED_POINTS = 30
 #: camera's ~1450 points at 5 mm -> ~440). Unseen-part error on the camera's drills 7.2 -> 6.6 mm
 #: (an even density; ``python benchmarks/bench_transfer.py``); 1.0x and 1.2x: 6.9 and 6.7 mm.
 AUTO_VOXEL_FACTOR = 1.4
+
+
+#: When the estimator also fits a second view (``second_view``): "never"; "ambiguous": only when the
+#: first view's shape posterior is yaw-ambiguous (:func:`yaw_ambiguous`); "always".
+SECOND_VIEW_POLICIES = ("never", "ambiguous", "always")
+#: A view is yaw-ambiguous when a shape hypothesis turned at least AMBIGUOUS_YAW_DEG from the MAP fit (about
+#: the vertical) keeps a tempered posterior weight above AMBIGUOUS_WEIGHT. Tuned on the COMMITTED mugs (45
+#: views, 3 hypotheses; ``python benchmarks/bench_second_view.py``): 19 MAP fits are more than 10 deg off;
+#: the rule flags 16 of them and 8 of the 26 right ones (24 second views; 39/45 right after, against 26 with
+#: one view and 40 with both views always); weight 0.2: 12 and 6 (35/45).
+AMBIGUOUS_YAW_DEG = 30.0
+AMBIGUOUS_WEIGHT = 0.05
 
 
 def fit_voxel_size(space: ShapeSpace, voxel_size="auto") -> float:
@@ -86,6 +99,7 @@ class ShapeEstimate:
     result: InferenceResult | None = None
     timing: dict = field(default_factory=dict)
     hypotheses: tuple = ()
+    views: int = 1  # camera views fitted: 2 when a second view was merged in (``second_view``)
 
     # Contexts deep-copy abstract state; an estimate is never mutated (and holds the shape space).
     def __deepcopy__(self, memo):
@@ -120,7 +134,8 @@ def estimate_on_table(space: ShapeSpace, p_W: np.ndarray, X_WT: np.ndarray, *, c
     """Fit ``space`` to the object points ``p_W`` (N, 3, world) standing on the table frame ``X_WT`` (4x4).
 
     ``camera_W`` (3,) the camera position in W for the visibility-aware
-    E-step (a single view), or None (a full cloud). ``yaw_candidates`` as in
+    E-step (a single view), (K, 3) the cameras of a cloud merged from K views,
+    or None (a full cloud). ``yaw_candidates`` as in
     ``infer_latent_pose`` (unknown yaw: 8 starts). ``voxel_size``: the fit
     sees the cloud averaged on a voxel grid of that edge (m; "auto":
     :func:`fit_voxel_size`, matched to the model's spacing; None: the cloud as
@@ -141,7 +156,7 @@ def estimate_on_table(space: ShapeSpace, p_W: np.ndarray, X_WT: np.ndarray, *, c
     if len(p_W) < MIN_OBSERVED_POINTS:
         return failed_estimate(space.q, f"no object in view ({len(p_W)} points < {MIN_OBSERVED_POINTS})", p_W)
     R_WT, p_WT = X_WT[:3, :3], X_WT[:3, 3]
-    cam_T = None if camera_W is None else (vector3(camera_W, "camera_W") - p_WT) @ R_WT
+    cam_T = None if camera_W is None else (camera_positions(camera_W) - p_WT) @ R_WT
     p_T = (p_W - p_WT) @ R_WT  # R_TW = R_WT^T
     if voxel > 0.0 and np.all(np.abs(p_T) < voxel * 2.0**40):  # (indices that fit an int64 by far)
         p_vox = voxel_grid(p_T, voxel)  # grid in the table frame: its axes are the fit's
@@ -165,6 +180,54 @@ def estimate_on_table(space: ShapeSpace, p_W: np.ndarray, X_WT: np.ndarray, *, c
     return best
 
 
+def functional_yaw(X_WO) -> float:
+    """Angle (rad) about the world z of the object's functional direction (+y of O projected on the xy plane)."""
+    X = np.asarray(X_WO, float)
+    return float(np.arctan2(X[1, 1], X[0, 1]))
+
+
+def yaw_ambiguous(estimate: ShapeEstimate, *, min_weight: float = AMBIGUOUS_WEIGHT,
+                  min_yaw_deg: float = AMBIGUOUS_YAW_DEG, temperature: float = POSTERIOR_TEMPERATURE) -> bool:
+    """Whether ``estimate``'s shape posterior leaves the object's yaw open: a hypothesis (finite energy) turned at
+    least ``min_yaw_deg`` from the MAP fit holds a tempered weight (``prediction.hypothesis_weights``) above
+    ``min_weight``. An estimate without hypotheses (a single fit) is never ambiguous."""
+    fits = [h for h in estimate.hypotheses if np.isfinite(h.energy)] if estimate.ok else []
+    if len(fits) < 2:
+        return False
+    w = hypothesis_weights([h.energy for h in fits], temperature)
+    yaw0 = functional_yaw(fits[0].X_WO)
+    for h, wi in zip(fits[1:], w[1:]):
+        turn = abs((functional_yaw(h.X_WO) - yaw0 + np.pi) % (2.0 * np.pi) - np.pi)
+        if wi > min_weight and np.degrees(turn) >= min_yaw_deg:
+            return True
+    return False
+
+
+def estimate_with_second_view(space: ShapeSpace, p_W: np.ndarray, X_WT: np.ndarray, *, camera_W=None,
+                              second_W=None, second_camera_W=None, policy: str = "ambiguous",
+                              **kwargs) -> ShapeEstimate:
+    """:func:`estimate_on_table` of the first view (``p_W``, seen from ``camera_W``), then -- by ``policy``
+    (:data:`SECOND_VIEW_POLICIES`) -- of both views merged (``second_W`` (M, 3) W, seen from
+    ``second_camera_W``): with both camera positions the merged fit is visibility-aware (a model point is a
+    mixture centre when either camera sees it); without them, it is fitted like a full cloud. The result's
+    ``views`` says which; its ``timing["first_view"]`` holds the first fit's time when both ran."""
+    if policy not in SECOND_VIEW_POLICIES:
+        raise InputError(f"second view policy: expected one of {SECOND_VIEW_POLICIES}, got {policy!r}")
+    first = estimate_on_table(space, p_W, X_WT, camera_W=camera_W, **kwargs)
+    second_W = np.zeros((0, 3)) if second_W is None else real_array(second_W, "second_W", "(M, 3) array")
+    if policy == "never" or second_W.size == 0 or (policy == "ambiguous" and not yaw_ambiguous(first)):
+        return first
+    merged = np.vstack([np.asarray(p_W, float).reshape(-1, 3), second_W.reshape(-1, 3)])
+    cameras = None
+    if camera_W is not None and second_camera_W is not None:
+        cameras = np.vstack([camera_positions(camera_W), camera_positions(second_camera_W)])
+    both = estimate_on_table(space, merged, X_WT, camera_W=cameras, **kwargs)
+    timing = dict(both.timing) | {"first_view": float(sum(v for v in first.timing.values()
+                                                          if isinstance(v, (int, float))))}
+    return dataclasses.replace(both, views=2, timing=timing,
+                               hypotheses=tuple(dataclasses.replace(h, views=2) for h in both.hypotheses))
+
+
 class LatentShapeEstimator(LeafSystem):
     """Latent shape x and object pose from the object's point cloud (module docstring: frames, events).
 
@@ -174,6 +237,8 @@ class LatentShapeEstimator(LeafSystem):
         input_ports:
         - object_cloud_W
         - X_WC (optional)
+        - second_cloud_W (optional)
+        - second_X_WC (optional)
         output_ports:
         - x
         - X_WO
@@ -189,6 +254,11 @@ class LatentShapeEstimator(LeafSystem):
         X_WC: ``RigidTransform``, pose of the camera C in W (single view: its
             position turns on the visibility-aware fit); leave it
             unconnected for a full (multi-view) cloud.
+        second_cloud_W: ``PointCloud`` (W, metres) of the object seen by a
+            second camera, merged in by the ``second_view`` policy
+            (:func:`estimate_with_second_view`); unconnected: one view.
+        second_X_WC: ``RigidTransform``, pose of the second camera in W
+            (with ``X_WC``: the merged fit is visibility-aware for both).
     Output ports:
         x: latent vector (q,), whitened (N(0, I) over the category).
         X_WO: ``RigidTransform``, rigid part of the fitted pose of the canonical frame O in W.
@@ -205,10 +275,12 @@ class LatentShapeEstimator(LeafSystem):
     fit's voxel grid, as in :func:`estimate_on_table`; resolved once here) and
     extra keyword arguments for ``infer_latent_pose`` (e.g.
     ``**core.inference.LEGACY_SEARCH`` with ``voxel_size=None``: the settings
-    before issue 17).
+    before issue 17); ``second_view`` (:data:`SECOND_VIEW_POLICIES`, "never"
+    by default): when the second camera's cloud is merged in.
     """
 
-    def __init__(self, space: ShapeSpace, X_WT, *, yaw_candidates=8, voxel_size="auto", **inference_kwargs):
+    def __init__(self, space: ShapeSpace, X_WT, *, yaw_candidates=8, voxel_size="auto", second_view: str = "never",
+                 **inference_kwargs):
         super().__init__()
         if not isinstance(space, ShapeSpace):
             raise InputError(f"space: expected a ShapeSpace, got {type(space).__name__}")
@@ -217,8 +289,13 @@ class LatentShapeEstimator(LeafSystem):
         self._yaws = yaw_candidates
         self._voxel = fit_voxel_size(space, voxel_size)
         self._kwargs = dict(inference_kwargs)
+        if second_view not in SECOND_VIEW_POLICIES:
+            raise InputError(f"second_view: expected one of {SECOND_VIEW_POLICIES}, got {second_view!r}")
+        self._second_view = second_view
         self._cloud_in = self.DeclareAbstractInputPort("object_cloud_W", AbstractValue.Make(PointCloud()))
         self._camera_in = self.DeclareAbstractInputPort("X_WC", AbstractValue.Make(RigidTransform()))
+        self._second_in = self.DeclareAbstractInputPort("second_cloud_W", AbstractValue.Make(PointCloud()))
+        self._second_camera_in = self.DeclareAbstractInputPort("second_X_WC", AbstractValue.Make(RigidTransform()))
         self._state = self.DeclareAbstractState(AbstractValue.Make(failed_estimate(space.q, "not yet estimated")))
         self.DeclareInitializationUnrestrictedUpdateEvent(self._update)
         state_only = {self.abstract_state_ticket(self._state)}
@@ -256,8 +333,15 @@ class LatentShapeEstimator(LeafSystem):
         camera_W = None
         if self._camera_in.HasValue(context):
             camera_W = self._camera_in.Eval(context).translation()
-        return estimate_on_table(self._space, p_W, self._X_WT, camera_W=camera_W,
-                                 yaw_candidates=self._yaws, voxel_size=self._voxel, **self._kwargs)
+        kwargs = dict(yaw_candidates=self._yaws, voxel_size=self._voxel, **self._kwargs)
+        if self._second_view == "never" or not self._second_in.HasValue(context):
+            return estimate_on_table(self._space, p_W, self._X_WT, camera_W=camera_W, **kwargs)
+        second_camera_W = None
+        if self._second_camera_in.HasValue(context):
+            second_camera_W = self._second_camera_in.Eval(context).translation()
+        return estimate_with_second_view(self._space, p_W, self._X_WT, camera_W=camera_W,
+                                         second_W=points_from_cloud(self._second_in.Eval(context)),
+                                         second_camera_W=second_camera_W, policy=self._second_view, **kwargs)
 
     def set_estimate(self, context, estimate: ShapeEstimate) -> None:
         """Write ``estimate`` into this system's state in ``context``."""

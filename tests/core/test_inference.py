@@ -169,3 +169,28 @@ def test_shape_hypotheses_refine_the_best_starts_and_keep_distinct_fits(space):
     for bad in (0, 1.5, "all", 400):
         with pytest.raises(InputError, match="hypotheses"):
             infer_latent_pose(space, T[vis], camera_position=cam, yaw_candidates=8, hypotheses=bad)
+
+
+def test_two_views_merged_are_fitted_with_the_union_of_their_visibility(space):
+    """Two cameras 90 deg apart: each sees part of the object, the merged cloud more. A model point counts as
+    seen when either camera sees it; one camera given as (1, 3) is the single-camera fit bit for bit."""
+    x_true = 0.8 * space.latent_train[3]
+    t_true = np.array([0.4, -0.1, 0.02])
+    T, vis_a, cam_a, R_true = _observe(space, x_true, 0.2, t_true, 1.1, az_deg=45.0)
+    _, vis_b, cam_b, _ = _observe(space, x_true, 0.2, t_true, 1.1, az_deg=135.0)
+    rng = np.random.default_rng(0)
+    obs_a = T[vis_a] + rng.normal(scale=5e-4, size=(vis_a.sum(), 3))
+    obs_b = T[vis_b] + rng.normal(scale=5e-4, size=(vis_b.sum(), 3))
+    one = infer_latent_pose(space, obs_a, camera_position=cam_a, prior=0.0, max_iter=60)
+    same = infer_latent_pose(space, obs_a, camera_position=cam_a[None], prior=0.0, max_iter=60)
+    assert np.array_equal(one.completed, same.completed) and np.array_equal(one.visible, same.visible)
+    both = infer_latent_pose(space, np.vstack([obs_a, obs_b]), camera_position=np.vstack([cam_a, cam_b]),
+                             prior=0.0, max_iter=200, tol=1e-7)
+    union = vis_a | vis_b
+    assert union.sum() > max(vis_a.sum(), vis_b.sum())
+    assert np.mean(both.visible == union) > 0.9  # the fit's visible set is the two cameras' union
+    assert abs(both.s - 1.1) < 0.02 and rotation_angle(both.R @ R_true.T) < 0.03
+    err = np.linalg.norm(both.completed - T, axis=1)
+    assert err[~union].mean() < 3e-3  # the part neither camera saw is completed
+    with pytest.raises(InputError, match="camera_position"):
+        infer_latent_pose(space, obs_a, camera_position=np.zeros((2, 2)))
