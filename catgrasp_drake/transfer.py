@@ -24,7 +24,6 @@ import dataclasses
 import functools
 import time
 from dataclasses import asdict, dataclass, field
-from pathlib import Path
 
 import numpy as np
 import trimesh
@@ -36,10 +35,9 @@ from pydrake.systems.framework import DiagramBuilder, EventStatus, LeafSystem
 
 from catgrasp_drake.category_model import CategoryModel
 from catgrasp_drake.core.visibility import camera_on_sphere_position
-from catgrasp_drake.data.dataset import instance_mesh_path
 from catgrasp_drake.errors import InputError
 from catgrasp_drake.perception.object_cloud import points_from_cloud
-from catgrasp_drake.planning.model import make_planning_model
+from catgrasp_drake.planning.model import make_planning_model, object_mesh_path
 from catgrasp_drake.planning.records import PlanParams, hold_plan
 from catgrasp_drake.prediction import ESTIMATORS, check_method, rigid_space
 from catgrasp_drake.robot.models import ARM_JOINTS, HAND_BASE_LINK
@@ -208,11 +206,9 @@ class TransferDiagram:
 
 def true_object_points_W(scenario: Scenario) -> np.ndarray:
     """Vertices (N, 3) of the scenario's true object mesh at its initial pose, in W (the ablation's obstacle)."""
-    o = scenario.object
-    if o.primitive is not None or o.instance is None:
-        raise InputError("the true-object planner needs a data-set or imported object, not a primitive")
-    path = Path(o.model_dir) / f"{o.instance}.obj" if o.model_dir is not None else instance_mesh_path(
-        o.category, o.instance)
+    path = object_mesh_path(scenario.object)
+    if path is None:
+        raise InputError("the true-object planner needs a data-set or imported object with its mesh, not a primitive")
     mesh = trimesh.load(path, force="mesh", process=False)
     X = scenario.X_WO()
     return np.asarray(mesh.vertices, float) @ X[:3, :3].T + X[:3, 3]

@@ -72,12 +72,12 @@ def planning_scene(plant: MultibodyPlant, plant_context, scene_graph, sg_context
     shoulder_W = shoulder.CalcPoseInWorld(plant_context).translation()
     frame_wrist = plant.GetJointByName(ARM_JOINTS[3], arm).child_body().body_frame()
     object_instances = [object_instance] if object_instance is not None else []
+    hand_ids = geometry_ids(plant, scene_graph, [hand])
     scene = PlanningScene(
         plant, plant_context, sg_context, scene_graph, arm_q_idx, hand_q_idx, frame_H, frame_wrist, q_full,
         robot_geoms=geometry_set(plant, scene_graph, [arm, hand]),
-        carried_ids=geometry_ids(plant, scene_graph, [hand]) + body_geometry_ids(
-            scene_graph, plant.GetJointByName(ARM_JOINTS[-1], arm).child_body()),
-        hand_ids=geometry_ids(plant, scene_graph, [hand]),
+        carried_ids=hand_ids + body_geometry_ids(scene_graph, plant.GetJointByName(ARM_JOINTS[-1], arm).child_body()),
+        hand_ids=hand_ids,
         object_geoms=geometry_set(plant, scene_graph, object_instances),
         table_geoms=geometry_set(plant, scene_graph, [table]),
         table_ids=geometry_ids(plant, scene_graph, [table]), shoulder_W=shoulder_W)

@@ -333,15 +333,13 @@ class LatentShapeEstimator(LeafSystem):
         camera_W = None
         if self._camera_in.HasValue(context):
             camera_W = self._camera_in.Eval(context).translation()
-        kwargs = dict(yaw_candidates=self._yaws, voxel_size=self._voxel, **self._kwargs)
-        if self._second_view == "never" or not self._second_in.HasValue(context):
-            return estimate_on_table(self._space, p_W, self._X_WT, camera_W=camera_W, **kwargs)
+        second_W = points_from_cloud(self._second_in.Eval(context)) if self._second_in.HasValue(context) else None
         second_camera_W = None
         if self._second_camera_in.HasValue(context):
             second_camera_W = self._second_camera_in.Eval(context).translation()
-        return estimate_with_second_view(self._space, p_W, self._X_WT, camera_W=camera_W,
-                                         second_W=points_from_cloud(self._second_in.Eval(context)),
-                                         second_camera_W=second_camera_W, policy=self._second_view, **kwargs)
+        return estimate_with_second_view(self._space, p_W, self._X_WT, camera_W=camera_W, second_W=second_W,
+                                         second_camera_W=second_camera_W, policy=self._second_view,
+                                         yaw_candidates=self._yaws, voxel_size=self._voxel, **self._kwargs)
 
     def set_estimate(self, context, estimate: ShapeEstimate) -> None:
         """Write ``estimate`` into this system's state in ``context``."""
