@@ -134,16 +134,25 @@ def test_split_dir(data_dir: str | Path) -> Path:
 
 
 def ensure_test_split(data_dir: str | Path) -> Path:
-    """Generate the test split (all categories, :data:`TEST_SEED`) into ``data_dir`` unless it is there."""
+    """Generate the test split (all categories, :data:`TEST_SEED`) into ``data_dir`` unless it is there,
+    made by the current generators (a changed generator regenerates it: its marker names their fingerprint)."""
     from catgrasp_drake.data.dataset import INSTANCE_COUNTS, generate_dataset
 
     root = test_split_dir(data_dir)
     marker = root / "COMPLETE"
-    if not marker.is_file():
+    stamp = f"seed {TEST_SEED}, {sum(INSTANCE_COUNTS.values())} instances, generators {_generator_version()}"
+    if not marker.is_file() or marker.read_text().strip() != stamp:
         generate_dataset(root, seed=TEST_SEED)
-        total = sum(INSTANCE_COUNTS.values())
-        atomic_write_text(marker, f"seed {TEST_SEED}, {total} instances\n")
+        atomic_write_text(marker, stamp + "\n")
     return root
+
+
+def _generator_version() -> str:
+    """Fingerprint of the code that generates the embedded categories' instances."""
+    from catgrasp_drake.runner import code_fingerprint
+
+    data = Path(__file__).resolve().parents[1] / "data"
+    return code_fingerprint([data / f for f in ("categories.py", "shapes.py", "dataset.py", "meshes.py")])
 
 
 def split_objects(config: BenchmarkConfig) -> list[BenchmarkObject]:

@@ -210,3 +210,20 @@ def test_yaw_error_is_the_signed_turn_of_the_functional_direction_about_z():
     assert yaw_error_deg(pose(0.3 + np.radians(25)), pose(0.3)) == pytest.approx(25.0)
     assert yaw_error_deg(pose(0.3 - np.radians(170)), pose(0.3)) == pytest.approx(-170.0)
     assert yaw_error_deg(pose(1.0, tilt=0.2), pose(1.0)) == pytest.approx(0.0, abs=1e-9)  # a tilt is not a yaw
+
+
+def test_a_test_split_made_by_other_generators_is_generated_again(tmp_path):
+    """The test split on disk is regenerated when its marker names other generators (a widened generator
+    must not be measured on the instances of the one before), and kept when it names these."""
+    from catgrasp_drake.benchmark.runner import ensure_test_split
+    from catgrasp_drake.data.dataset import tree_digest
+
+    root = ensure_test_split(tmp_path)
+    fresh = tree_digest(root)
+    mesh = root / "drill" / "drill_00" / "drill_00.obj"
+    mesh.write_text("stale")  # an instance of some earlier generator ...
+    ensure_test_split(tmp_path)
+    assert mesh.read_text() == "stale"  # ... is kept while the marker names the current generators
+    (root / "COMPLETE").write_text("seed 7919, 45 instances\n")  # the marker an older version wrote
+    ensure_test_split(tmp_path)
+    assert tree_digest(root) == fresh

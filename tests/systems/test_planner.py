@@ -107,7 +107,9 @@ def test_the_wrist_flange_is_raised_over_the_table_with_the_hand(drill):
     plan = planning.plan(low, params)
     assert plan.ok, plan.status
     d = _distances_to_table(planning, plan.q_arm[i], plan.q_hand[i])
-    assert d["ur10::ur10_wrist_3_link"] == pytest.approx(params.table_clearance, abs=1e-3)
+    # within the IK's tolerances: 1 mm in position, 0.01 rad in orientation (~1 mm at the flange)
+    assert d["ur10::ur10_wrist_3_link"] == pytest.approx(params.table_clearance,
+                                                         abs=params.position_tol + 0.1 * params.orientation_tol)
 
 
 def test_a_grasp_far_below_the_table_is_refused(drill):
