@@ -17,8 +17,9 @@ For each category it prints
   drills) with the 8-start yaw search: the fit confidence (``core.inference``:
   ~1 for a shape the space reproduces) and the estimated scale (1 = the size
   of the canonical instance), and the fit's residual (mean distance from the
-  object's points to the fitted shape, mm: independent of the cloud's density). For comparison the same fit of every committed
-  and test-split instance is summarised (median and range).
+  object's points to the fitted shape, mm: independent of the cloud's density).
+  For comparison the same fit of every committed and test-split instance is
+  summarised (median and range).
 
 Every real object is in its canonical frame already (the AIS clouds are; the
 YCB scans by their stated transforms), so the fit starts from the true
