@@ -1,0 +1,77 @@
+"""Trace one hand-written grasp trial: the object's tilt, rise and hand contacts every few hundredths of a second.
+
+    python diagrams/trace_trial.py --category mug --instance mug_09 [--every 0.1] [--start reach] [--stop end]
+
+Where ``catgrasp film`` shows a trial at its phases in pictures, this prints,
+every ``--every`` seconds of simulated time from the start of the phase
+``--start`` to the start of ``--stop``, the phase, the object's tilt (deg,
+against its pose at the start), its rise (cm) and the hand links touching it
+-- so one can read *when* a grasp goes wrong and which finger did it (e.g. a
+mug that tilts while the fingers close, before anything is lifted). The
+trial is the category's hand-written grasp on the instance at the
+category's default scenario, true-object planner, default physics; the
+motion is the same as an untraced trial's (the plant's updates are periodic).
+"""
+
+from __future__ import annotations
+
+import argparse
+
+from pydrake.systems.analysis import Simulator
+
+from catgrasp_drake.station.handwritten import load_handwritten_motion
+from catgrasp_drake.station.judge import tilt_deg
+from catgrasp_drake.station.scenario import load_scenario, with_instance
+from catgrasp_drake.trial import plan_for, station_snapshot, trial_diagram
+
+PHASES = ("approach", "reach", "close", "lift", "hold", "shake", "press", "end")
+
+
+def _short(link: str) -> str:
+    return link.split("::")[-1].removeprefix("svh_").removesuffix("_link")
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--category", required=True, choices=("drill", "spray_bottle", "mug"))
+    parser.add_argument("--instance", help="embedded instance (default: the scenario's)")
+    parser.add_argument("--every", type=float, default=0.1, help="print interval (s of simulated time)")
+    parser.add_argument("--start", default="reach", choices=PHASES)
+    parser.add_argument("--stop", default="end", choices=PHASES)
+    args = parser.parse_args(argv)
+    if not args.every > 0:
+        parser.error("--every: expected > 0")
+
+    scenario = load_scenario(f"{args.category}_default")
+    if args.instance:
+        scenario = with_instance(scenario, args.instance)
+    instance = scenario.object.instance
+    motion = load_handwritten_motion(args.category, instance)
+    td = trial_diagram(scenario)
+    plan = plan_for(td, motion.in_world(scenario.X_WO()))
+    if not plan.ok:
+        print(f"{instance}: plan refused ({plan.status})")
+        return 1
+    timeline = plan.timeline.as_dict()
+    context = td.diagram.CreateDefaultContext()
+    td.generator.set_plan(td.generator.GetMyMutableContextFromRoot(context), plan)
+    simulator = Simulator(td.diagram, context)
+    simulator.Initialize()
+    start = station_snapshot(td.station, context)
+    print(f"{instance}: phases " + ", ".join(f"{k} {v:.2f} s" for k, v in timeline.items()))
+    print(f"{'t (s)':>6s} {'phase':8s} {'tilt':>6s} {'rise':>7s}  hand links on the object")
+    t, t_stop = timeline[args.start], timeline[args.stop]
+    while t <= t_stop + 1e-9:
+        simulator.AdvanceTo(t)
+        s = station_snapshot(td.station, context)
+        phase = max((k for k in timeline if timeline[k] <= t + 1e-9), key=lambda k: timeline[k])
+        links = sorted({_short(c.other(instance)) for c in s.contacts
+                        if c.involves(instance) and c.other(instance).startswith("svh")})
+        rise_cm = 100 * (s.X_WO[2, 3] - start.X_WO[2, 3])
+        print(f"{t:6.2f} {phase:8s} {tilt_deg(start.X_WO, s.X_WO):5.1f}° {rise_cm:5.1f}cm  {', '.join(links) or '-'}")
+        t += args.every
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
