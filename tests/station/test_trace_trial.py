@@ -26,6 +26,7 @@ def test_the_mug_tilts_during_the_closing_not_the_hold(capsys):
                           "--every", "0.55"]) == 0
     rows = [line.split() for line in capsys.readouterr().out.splitlines() if re.match(r"\s*\d+\.\d+ ", line)]
     (t0, phase0, tilt0, *_), (t1, phase1, tilt1, rise1, *links) = rows[0], rows[-1]
+    assert float(t1) - float(t0) == pytest.approx(1.1)  # the closing lasts 1.1 s: traced from its start to the lift
     assert phase0 == "close" and float(tilt0.rstrip("°")) < 1.0  # upright when the fingers start to close
     assert phase1 in ("close", "lift") and float(tilt1.rstrip("°")) > 15.0  # tilted before the lift
     assert 0.5 < float(rise1.rstrip("cm")) < 3.0 and links  # the handle side raised, in the hand
