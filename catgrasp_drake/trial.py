@@ -239,13 +239,13 @@ def pose_tuple(X: np.ndarray) -> tuple:
 
 def run_grasp_trial(scenario: Scenario, motion_O: GraspMotion, *, meshcat: Meshcat | None = None,
                     record_html: str | Path | None = None, params: PlanParams = PlanParams(),
-                    on_phase=None) -> TrialResult:
+                    on_phase=None, instants=None) -> TrialResult:
     """Execute ``motion_O`` (hand control poses in the OBJECT frame) on the scenario's object.
 
     With ``meshcat`` the run is recorded on it (MeshcatVisualizer recording);
     with ``record_html`` as well, the recording is written there as one
     self-contained HTML file. ``on_phase(label, root_context)`` is called
-    at the phases of the motion (:func:`simulate_and_judge`). Returns a
+    at the phases of the motion, or at ``instants`` (:func:`simulate_and_judge`). Returns a
     :class:`TrialResult`; never raises for a failed grasp.
     """
     if not isinstance(motion_O, GraspMotion):
@@ -286,7 +286,7 @@ def run_grasp_trial(scenario: Scenario, motion_O: GraspMotion, *, meshcat: Meshc
     td.generator.set_plan(td.generator.GetMyMutableContextFromRoot(context), plan)
     verdict, X_final, end, sim_time = simulate_and_judge(td.diagram, context, td.station, plan.timeline, spec,
                                                          meshcat=meshcat, record_html=record_html,
-                                                         on_phase=on_phase)
+                                                         on_phase=on_phase, instants=instants)
     return result(verdict, X_final, end, sim_time)
 
 
@@ -308,7 +308,7 @@ def phase_instants(timeline) -> tuple[tuple[str, float], ...]:
 
 def simulate_and_judge(diagram, context, station: StationHandles, timeline, spec: JudgeSpec, *,
                        meshcat: Meshcat | None = None, record_html=None, initialize_params=None,
-                       max_wall_s: float = MAX_TRIAL_WALL_S, on_phase=None):
+                       max_wall_s: float = MAX_TRIAL_WALL_S, on_phase=None, instants=None):
     """Simulate ``diagram`` from ``context`` to ``timeline.end`` and judge the grasp.
 
     Snapshots are taken at the start, at ``timeline.close``, ``timeline.hold``
@@ -320,13 +320,17 @@ def simulate_and_judge(diagram, context, station: StationHandles, timeline, spec
     Past ``max_wall_s`` seconds of wall-clock time the run stops with a
     ``simulation_timeout`` verdict.
     With ``on_phase`` (a callable ``on_phase(label, context)``) the run also
-    stops at every instant of :func:`phase_instants` and calls it there (a
-    film; the simulated motion is the same: the plant's updates are periodic).
+    stops at every instant of :func:`phase_instants` -- or of ``instants``,
+    ``(label, t)`` pairs in time order -- and calls it there (a film, a trace;
+    the simulated motion is the same: the plant's updates are periodic).
     Returns ``(verdict, X_WO_final, end_snapshot or None, simulated_time_s)``.
     """
     apply_context_knobs(station, context)
     simulator = Simulator(diagram, context)
-    instants = list(phase_instants(timeline)) if on_phase is not None else []
+    if on_phase is None:
+        instants = []
+    else:
+        instants = list(phase_instants(timeline) if instants is None else instants)
 
     def advance_to(t: float) -> None:
         while instants and instants[0][1] <= t:

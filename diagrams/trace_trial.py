@@ -9,20 +9,21 @@ against its pose at the start), its rise (cm) and the hand links touching it
 -- so one can read *when* a grasp goes wrong and which finger did it (e.g. a
 mug that tilts while the fingers close, before anything is lifted). The
 trial is the category's hand-written grasp on the instance at the
-category's default scenario, true-object planner, default physics; the
-motion is the same as an untraced trial's (the plant's updates are periodic).
+category's default scenario, true-object planner, default physics, run by
+``trial.run_grasp_trial`` (the same motion as an untraced trial's: the
+plant's updates are periodic); its verdict ends the trace.
 """
 
 from __future__ import annotations
 
 import argparse
 
-from pydrake.systems.analysis import Simulator
+import numpy as np
 
 from catgrasp_drake.station.handwritten import load_handwritten_motion
 from catgrasp_drake.station.judge import tilt_deg
 from catgrasp_drake.station.scenario import load_scenario, with_instance
-from catgrasp_drake.trial import plan_for, station_snapshot, trial_diagram
+from catgrasp_drake.trial import plan_for, run_grasp_trial, station_snapshot, trial_diagram
 
 PHASES = ("approach", "reach", "close", "lift", "hold", "shake", "press", "end")
 
@@ -47,29 +48,32 @@ def main(argv=None) -> int:
         scenario = with_instance(scenario, args.instance)
     instance = scenario.object.instance
     motion = load_handwritten_motion(args.category, instance)
-    td = trial_diagram(scenario)
-    plan = plan_for(td, motion.in_world(scenario.X_WO()))
+    td = trial_diagram(scenario)  # cached: the trial below runs on this diagram
+    plan = plan_for(td, motion.in_world(scenario.X_WO()))  # the trial's own plan, for its timeline
     if not plan.ok:
         print(f"{instance}: plan refused ({plan.status})")
         return 1
     timeline = plan.timeline.as_dict()
-    context = td.diagram.CreateDefaultContext()
-    td.generator.set_plan(td.generator.GetMyMutableContextFromRoot(context), plan)
-    simulator = Simulator(td.diagram, context)
-    simulator.Initialize()
-    start = station_snapshot(td.station, context)
+    grid = np.arange(timeline[args.start], timeline[args.stop] + 1e-9, args.every)
+    instants = [(max((k for k in timeline if timeline[k] <= t + 1e-9), key=timeline.get), float(t)) for t in grid]
     print(f"{instance}: phases " + ", ".join(f"{k} {v:.2f} s" for k, v in timeline.items()))
     print(f"{'t (s)':>6s} {'phase':8s} {'tilt':>6s} {'rise':>7s}  hand links on the object")
-    t, t_stop = timeline[args.start], timeline[args.stop]
-    while t <= t_stop + 1e-9:
-        simulator.AdvanceTo(t)
+    start = {}
+
+    def trace(label, context):
         s = station_snapshot(td.station, context)
-        phase = max((k for k in timeline if timeline[k] <= t + 1e-9), key=lambda k: timeline[k])
+        if label == "start":
+            start["X_WO"] = s.X_WO
+            return
         links = sorted({_short(c.other(instance)) for c in s.contacts
                         if c.involves(instance) and c.other(instance).startswith("svh")})
-        rise_cm = 100 * (s.X_WO[2, 3] - start.X_WO[2, 3])
-        print(f"{t:6.2f} {phase:8s} {tilt_deg(start.X_WO, s.X_WO):5.1f}° {rise_cm:5.1f}cm  {', '.join(links) or '-'}")
-        t += args.every
+        rise_cm = 100 * (s.X_WO[2, 3] - start["X_WO"][2, 3])
+        print(f"{s.time:6.2f} {label:8s} {tilt_deg(start['X_WO'], s.X_WO):5.1f}° {rise_cm:5.1f}cm  "
+              f"{', '.join(links) or '-'}")
+
+    r = run_grasp_trial(scenario, motion, on_phase=trace, instants=instants)
+    verdict = "functional" if r.functional_success else "grasped, not functional" if r.grasp_success else "failed"
+    print(f"{instance}: {verdict} ({r.failure_reason or 'ok'}); tilt {r.object_tilt_deg:.1f}° at the end")
     return 0
 
 

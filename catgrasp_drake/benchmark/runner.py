@@ -147,12 +147,17 @@ def ensure_test_split(data_dir: str | Path) -> Path:
     return root
 
 
-def _generator_version() -> str:
-    """Fingerprint of the code that generates the embedded categories' instances."""
+def _data_code_version(*modules: str) -> str:
+    """Fingerprint of the ``catgrasp_drake/data`` modules that make a split's objects (changed code: made again)."""
     from catgrasp_drake.runner import code_fingerprint
 
     data = Path(__file__).resolve().parents[1] / "data"
-    return code_fingerprint([data / f for f in ("categories.py", "shapes.py", "dataset.py", "meshes.py")])
+    return code_fingerprint([data / f for f in modules])
+
+
+def _generator_version() -> str:
+    """Fingerprint of the code that generates the embedded categories' instances."""
+    return _data_code_version("categories.py", "shapes.py", "dataset.py", "meshes.py")
 
 
 def split_objects(config: BenchmarkConfig) -> list[BenchmarkObject]:
@@ -201,10 +206,7 @@ def split_objects(config: BenchmarkConfig) -> list[BenchmarkObject]:
 
 def _ycb_preparation_version() -> str:
     """Fingerprint of the code that turns a YCB scan into an instance (a changed import re-prepares them)."""
-    from catgrasp_drake.runner import code_fingerprint
-
-    data = Path(__file__).resolve().parents[1] / "data"
-    return code_fingerprint([data / f for f in ("ycb.py", "importer.py", "meshes.py", "dataset.py")])
+    return _data_code_version("ycb.py", "importer.py", "meshes.py", "dataset.py")
 
 
 # ----------------------------------------------------------------------------- placements
