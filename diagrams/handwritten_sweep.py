@@ -3,6 +3,7 @@
     python diagrams/handwritten_sweep.py [--categories drill spray_bottle mug] [--workers 2]
                                          [--cache out/handwritten_sweep_cache] [--json out/handwritten_sweep.json]
                                          [--shift DX DY DZ] [--rotate RX RY RZ] [--model FILE]
+                                         [--posture NAME.JOINT=RAD ...]
                                          [--objects DIR...] [--placements N] [--no-object-clearance]
 
 Each trial uses the category's default scenario (``<category>_default`` in
@@ -12,7 +13,9 @@ anchored to the instance's annotated region (``load_handwritten_motion``).
 ``--shift`` (m) and ``--rotate`` (deg, object-frame x-y-z Euler angles about
 the anchor region's centre) move the whole grasp in the object frame: the way
 to try a change to a hand-written grasp, and to see how far off a predicted
-grasp may land before it fails. ``--model FILE`` (a trained model of ONE
+grasp may land before it fails; ``--posture closed.svh_pinky=0.856`` sets
+one joint of one hand posture of every grasp (rad), the way to try a
+posture change. ``--model FILE`` (a trained model of ONE
 category) runs the model's learned grasp instead on each of its training
 instances -- the regressed grasp R(x_i) warped by W(x_i), exactly what the
 transfer executes under perfect perception -- so ``--shift`` shows how sharp
@@ -50,7 +53,7 @@ CATEGORIES = ("drill", "spray_bottle", "mug")
 def sweep_task(spec: dict) -> dict:
     """One trial: ``{"category", "instance"}`` -> JSON-able outcome (module-level: runs in workers)."""
     from catgrasp_drake.planning.records import PlanParams
-    from catgrasp_drake.station.handwritten import load_handwritten_motion, shifted_motion
+    from catgrasp_drake.station.handwritten import load_handwritten_motion, shifted_motion, with_postures
     from catgrasp_drake.station.scenario import load_scenario, random_placement, with_instance
     from catgrasp_drake.trial import run_grasp_trial
 
@@ -60,6 +63,8 @@ def sweep_task(spec: dict) -> dict:
         scenario = random_placement(scenario, spec["seed"])
     motion = learned_motion(spec["model"], category, instance) if spec.get("model") else \
         load_handwritten_motion(category, instance, annotations_dir=model_dir)
+    if spec.get("postures"):
+        motion = with_postures(motion, spec["postures"])
     if spec.get("shift") or spec.get("rotate"):
         motion = shifted_motion(motion, category, instance, spec.get("shift") or (0, 0, 0),
                                 spec.get("rotate") or (0, 0, 0), annotations_dir=model_dir)
@@ -89,6 +94,23 @@ def learned_motion(path: str, category: str, instance: str):
     return model.transfer(model.space.latent_train[k], frame="object")
 
 
+def posture_overrides(items: list[str], error) -> dict:
+    """``["closed.svh_pinky=0.856", ...]`` -> ``{"closed": {"svh_pinky": 0.856}}``; ``error(message)`` on a
+    malformed item (the joint and posture names are checked when the motion is made)."""
+    out: dict = {}
+    for item in items:
+        name, _, value = item.partition("=")
+        posture, _, joint = name.partition(".")
+        try:
+            angle = float(value)
+        except ValueError:
+            angle = None
+        if not posture or not joint or angle is None:
+            error(f"--posture: expected NAME.JOINT=RAD (e.g. closed.svh_pinky=0.856), got {item!r}")
+        out.setdefault(posture, {})[joint] = angle
+    return out
+
+
 def _fmt(value, width: int, digits: int, scale: float = 1.0) -> str:
     """``value * scale`` right-aligned, or "-" when it was not measured (None)."""
     return f"{'-':>{width}s}" if value is None else f"{value * scale:{width}.{digits}f}"
@@ -116,6 +138,8 @@ def main(argv=None) -> int:
                     help="move every grasp by this (m, object frame)")
     ap.add_argument("--rotate", type=float, nargs=3, metavar=("RX", "RY", "RZ"),
                     help="turn every grasp about its anchor region's centre (deg, object-frame x-y-z Euler angles)")
+    ap.add_argument("--posture", nargs="+", action="extend", default=[], metavar="NAME.JOINT=RAD",
+                    help="set one joint of one posture of every grasp, e.g. closed.svh_pinky=0.856 (rad)")
     ap.add_argument("--model", type=Path, help="a trained model: its learned grasp on each of its training "
                                                  "instances instead of the hand-written one (one category)")
     ap.add_argument("--objects", type=Path, nargs="+", metavar="DIR",
@@ -128,6 +152,8 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
 
     variant = {k: list(v) for k, v in (("shift", args.shift), ("rotate", args.rotate)) if v and any(v)}
+    if args.posture:
+        variant["postures"] = posture_overrides(args.posture, ap.error)
     instances = {c: list_instances(c) for c in args.categories}
     if args.model is not None:
         from catgrasp_drake.category_model import CategoryModel

@@ -82,18 +82,40 @@ def motion_from_spec(spec: dict, annotations: dict | None = None, postures: dict
     X_pre[:3, 3] -= float(spec.get("pregrasp_distance", 0.08)) * R[:, 1]
     if postures is None:
         postures = load_hand_postures(spec.get("postures", spec.get("category")))
-    postures = {k: np.array(v, float) for k, v in postures.items()}
-    overrides = spec.get("posture_overrides") or {}
-    if overrides:
-        for name, joints in overrides.items():
-            if name not in postures:
-                raise InputError(f"{where}.posture_overrides: unknown posture {name!r}")
-            for joint, value in joints.items():
-                if joint not in HAND_ACTUATED_JOINTS:
-                    raise InputError(f"{where}.posture_overrides.{name}: unknown joint {joint!r}")
-                postures[name][HAND_ACTUATED_JOINTS.index(joint)] = float(value)
+    postures = overridden_postures(postures, spec.get("posture_overrides") or {}, f"{where}.posture_overrides")
     return GraspMotion(np.stack([X_pre, X_grasp]), ("pregrasp", "grasp"), postures, "object",
                        float(spec.get("lift_height", 0.12)), float(spec.get("hold_time", 2.0)))
+
+
+def overridden_postures(postures, overrides, where: str = "posture_overrides") -> dict[str, np.ndarray]:
+    """``postures`` (name -> 9 joint angles, rad) with ``overrides`` ({posture: {joint: angle (rad)}}) written in.
+
+    Unknown postures or joints, and angles that are not numbers, raise ``InputError`` naming them."""
+    postures = {k: np.array(v, float) for k, v in postures.items()}
+    if not isinstance(overrides, dict):
+        raise InputError(f"{where}: expected a mapping posture -> {{joint: angle}}")
+    for name, joints in overrides.items():
+        if name not in postures:
+            raise InputError(f"{where}: unknown posture {name!r}; have {sorted(postures)}")
+        if not isinstance(joints, dict):
+            raise InputError(f"{where}.{name}: expected a mapping joint -> angle (rad)")
+        for joint, value in joints.items():
+            if joint not in HAND_ACTUATED_JOINTS:
+                raise InputError(f"{where}.{name}: unknown joint {joint!r}; joints: {', '.join(HAND_ACTUATED_JOINTS)}")
+            try:
+                angle = float(value)
+            except (TypeError, ValueError):
+                angle = float("nan")
+            if not np.isfinite(angle):
+                raise InputError(f"{where}.{name}.{joint}: expected an angle in radians, got {value!r}")
+            postures[name][HAND_ACTUATED_JOINTS.index(joint)] = angle
+    return postures
+
+
+def with_postures(motion: GraspMotion, overrides) -> GraspMotion:
+    """``motion`` with some joints of its postures replaced: ``overrides`` = {posture: {joint: angle (rad)}},
+    e.g. ``{"closed": {"svh_pinky": 0.856}}`` -- the way to try a posture change on a grasp."""
+    return replace(motion, postures=overridden_postures(motion.postures, overrides))
 
 
 def _annotations(category: str, instance: str, annotations_dir: str | Path | None) -> dict:

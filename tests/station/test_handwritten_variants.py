@@ -28,3 +28,54 @@ def test_a_variant_turns_the_grasp_about_the_trigger_then_shifts_it():
         # the trigger centre, seen from the hand, has moved by the shift only
         np.testing.assert_allclose(Y[:3, 3] - (R @ (X[:3, 3] - centre) + centre), shift, atol=1e-12)
     assert v.pose_names == motion.pose_names and v.frame == "object"
+
+
+def test_a_posture_override_sets_one_joint_of_one_posture():
+    from catgrasp_drake.robot.models import HAND_ACTUATED_JOINTS
+    from catgrasp_drake.station.handwritten import with_postures
+
+    motion = load_handwritten_motion("mug", "mug_03")
+    v = with_postures(motion, {"closed": {"svh_pinky": 0.856}})
+    k = HAND_ACTUATED_JOINTS.index("svh_pinky")
+    assert v.posture("closed")[k] == 0.856 and motion.posture("closed")[k] == 0.65  # the original is untouched
+    others = [i for i in range(len(HAND_ACTUATED_JOINTS)) if i != k]
+    np.testing.assert_array_equal(v.posture("closed")[others], motion.posture("closed")[others])
+    for name in ("open", "preshape"):
+        np.testing.assert_array_equal(v.posture(name), motion.posture(name))
+    np.testing.assert_array_equal(v.poses, motion.poses)
+
+
+def test_a_bad_posture_override_names_the_problem():
+    import pytest
+
+    from catgrasp_drake.errors import InputError
+    from catgrasp_drake.station.handwritten import with_postures
+
+    motion = load_handwritten_motion("mug", "mug_03")
+    for overrides, message in (({"clenched": {"svh_pinky": 0.5}}, "unknown posture 'clenched'"),
+                               ({"closed": {"svh_toe": 0.5}}, "unknown joint 'svh_toe'"),
+                               ({"closed": {"svh_pinky": "lots"}}, "expected an angle in radians")):
+        with pytest.raises(InputError, match=message):
+            with_postures(motion, overrides)
+
+
+def test_the_sweep_reads_posture_overrides_from_the_command_line():
+    import importlib.util
+
+    import pytest
+
+    from tests.conftest import REPO
+
+    spec = importlib.util.spec_from_file_location("handwritten_sweep", REPO / "diagrams" / "handwritten_sweep.py")
+    sweep = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(sweep)
+
+    def error(message):
+        raise ValueError(message)
+
+    assert sweep.posture_overrides(["closed.svh_pinky=0.856", "closed.svh_thumb_flexion=0.674",
+                                    "preshape.svh_ring=0.1"], error) == {
+        "closed": {"svh_pinky": 0.856, "svh_thumb_flexion": 0.674}, "preshape": {"svh_ring": 0.1}}
+    for bad in ("closed.svh_pinky", "svh_pinky=0.8", "closed.svh_pinky=much"):
+        with pytest.raises(ValueError, match="NAME.JOINT=RAD"):
+            sweep.posture_overrides([bad], error)
