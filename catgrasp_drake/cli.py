@@ -255,7 +255,12 @@ def _default_records_path(config) -> Path:
 
 
 def _cmd_benchmark(args) -> int:
-    from catgrasp_drake.benchmark.report import summary_table, write_benchmark_records
+    from catgrasp_drake.benchmark.report import (
+        load_benchmark_records,
+        merged_records,
+        summary_table,
+        write_benchmark_records,
+    )
     from catgrasp_drake.benchmark.runner import BenchmarkConfig, run_benchmark, trial_specs
 
     split = args.split or ("objects" if args.objects else "test")
@@ -269,6 +274,7 @@ def _cmd_benchmark(args) -> int:
         physics=args.physics, min_confidence=args.min_confidence, data_dir=args.data, cache_dir=args.cache,
         workers=args.workers, ray=args.ray)
     out = Path(args.out) if args.out else _default_records_path(config)
+    kept = load_benchmark_records(out) if args.merge and out.exists() else []  # read (and checked) before the run
     specs = trial_specs(config)
     if not specs:
         raise InputError("the selection holds no trials (check --instances and --categories)")
@@ -280,12 +286,14 @@ def _cmd_benchmark(args) -> int:
     bar = _Progress()
     t0 = time.perf_counter()
     records = run_benchmark(config, progress=lambda o, done, total: bar("trials", done, total))
-    write_benchmark_records(out, records)
+    written = merged_records(kept, records) if args.merge else records
+    write_benchmark_records(out, written)
     errors = [r for r in records if r.get("reason") in ("task_error", "worker_died")]
     print(summary_table(records))
     if errors:
         print(f"{len(errors)} trials ended in an error (reason task_error/worker_died), e.g.: {errors[0]['detail']}")
-    print(f"wrote {out} ({len(records)} records) in {time.perf_counter() - t0:.0f} s")
+    merged = f"; {len(written) - len(records)} records of other trials kept from the file" if args.merge else ""
+    print(f"wrote {out} ({len(written)} records{merged}) in {time.perf_counter() - t0:.0f} s")
     return 0
 
 
@@ -609,6 +617,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="worker processes (default: all cores; 0: in this process)")
     b.add_argument("--ray", default=None, help="run trials on a Ray cluster: 'auto', 'local' or the head's address")
     b.add_argument("--out", help="records file (default: benchmarks/results/<split>[_...].jsonl)")
+    b.add_argument("--merge", action="store_true",
+                   help="keep the records file's other trials: this run's trials replace theirs (e.g. one category "
+                        "re-run after retraining it); without it the file is overwritten")
     b.set_defaults(func=_cmd_benchmark)
 
     r = sub.add_parser("report", help="rebuild the README's and docs/benchmark.md's benchmark tables from records")

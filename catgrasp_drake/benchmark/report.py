@@ -104,6 +104,21 @@ def write_benchmark_records(path: str | Path, records: Iterable[dict]) -> None:
     write_json_lines(path, _validated(records), RECORDS_FORMAT, FORMAT_VERSION)
 
 
+def merged_records(existing: Iterable[dict], new: Iterable[dict]) -> list[dict]:
+    """``existing`` with every trial that ``new`` holds replaced by ``new``'s record (same :data:`TRIAL_KEY`),
+    in place, and ``new``'s other trials appended: how one category or method is re-run into a records file
+    that holds others (``catgrasp benchmark --merge``)."""
+    new = _validated(new, unique=True)
+    key = {json.dumps([r.get(f) for f in TRIAL_KEY], default=str): r for r in new}
+    out, used = [], set()
+    for r in _validated(existing, unique=True):
+        k = json.dumps([r.get(f) for f in TRIAL_KEY], default=str)
+        out.append(key.get(k, r))
+        if k in key:
+            used.add(k)
+    return out + [r for k, r in key.items() if k not in used]
+
+
 def _record_files(paths) -> list[Path]:
     if isinstance(paths, (str, Path)):
         paths = [paths]

@@ -16,6 +16,7 @@ from catgrasp_drake.benchmark.report import (
     check_markdown,
     load_benchmark_records,
     markdown_tables,
+    merged_records,
     report,
     summary_table,
     update_markdown,
@@ -94,6 +95,22 @@ def test_records_round_trip(tmp_path, records):
 def _assert_one_line_naming(err, path):
     msg = str(err.value)
     assert str(path) in msg and "\n" not in msg
+
+
+def test_a_merge_replaces_the_rerun_trials_in_place_and_keeps_the_others(records):
+    old = [r for r in records if r["split"] == "test"]
+    rerun = [dict(r, functional=not r["functional"], code_version="rerun") for r in old
+             if r["category"] == "spray_bottle" and r["method"] == "latent"]
+    extra = [dict(r, trial=7, code_version="rerun") for r in rerun[:2]]  # trials the file did not hold
+    merged = merged_records(old, rerun + extra)
+    assert len(merged) == len(old) + 2 and merged[-2:] == extra
+    for before, after in zip(old, merged):  # same order, the re-run trials replaced where they were
+        replaced = before["category"] == "spray_bottle" and before["method"] == "latent"
+        assert after["code_version"] == ("rerun" if replaced else "synthetic")
+        assert after["functional"] == (not before["functional"] if replaced else before["functional"])
+    assert merged_records([], rerun) == rerun
+    with pytest.raises(InputError, match="same trial twice"):
+        merged_records(old, rerun + rerun[:1])
 
 
 def test_corrupted_records_file_names_the_file(tmp_path, records):

@@ -227,3 +227,28 @@ def test_a_test_split_made_by_other_generators_is_generated_again(tmp_path):
     (root / "COMPLETE").write_text("seed 7919, 45 instances\n")  # the marker an older version wrote
     ensure_test_split(tmp_path)
     assert tree_digest(root) == fresh
+
+
+def test_benchmark_merge_rewrites_only_the_rerun_trials(tmp_path, monkeypatch):
+    """``catgrasp benchmark --merge`` (a category re-run after retraining it) keeps the file's other trials;
+    without it the file holds this run's trials only. The trials themselves are stubbed: this is the CLI's
+    bookkeeping, the records are the report's."""
+    import catgrasp_drake.benchmark.runner as runner
+    from catgrasp_drake.benchmark.report import load_benchmark_records, write_benchmark_records
+    from catgrasp_drake.cli import main
+
+    def record(category, trial, functional):
+        return {"split": "test", "category": category, "instance": f"{category}_00", "trial": trial,
+                "view": "single", "method": "latent", "physics": "default", "seed": 0, "grasp": functional,
+                "functional": functional, "reason": None if functional else "not_lifted", "detail": ""}
+
+    out = tmp_path / "test.jsonl"
+    write_benchmark_records(out, [record("drill", 0, True), record("mug", 0, False), record("mug", 1, False)])
+    rerun = [record("mug", 0, True), record("mug", 1, True), record("mug", 2, True)]
+    monkeypatch.setattr(runner, "trial_specs", lambda config: [{"category": "mug", "instance": "mug_00", "trial": 0}])
+    monkeypatch.setattr(runner, "run_benchmark", lambda config, **kw: list(rerun))
+    args = ["benchmark", "--categories", "mug", "--methods", "latent", "--out", str(out)]
+    assert main(args + ["--merge"]) == 0
+    assert load_benchmark_records(out) == [record("drill", 0, True)] + rerun
+    assert main(args) == 0
+    assert load_benchmark_records(out) == rerun
