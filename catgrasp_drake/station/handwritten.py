@@ -34,9 +34,11 @@ from catgrasp_drake.errors import InputError, ModelFileError
 from catgrasp_drake.grasping.constraints import load_constraint
 from catgrasp_drake.grasping.motion import GraspMotion
 from catgrasp_drake.grasping.sampling import perturb_poses
-from catgrasp_drake.robot.models import HAND_ACTUATED_JOINTS, load_hand_postures
+from catgrasp_drake.robot.models import HAND_ACTUATED_JOINTS, hand_joint_limits, load_hand_postures
 
 GRASPS_DIR = Path(__file__).resolve().parents[2] / "models" / "grasps"
+#: Tolerance (rad) of the joint-limit check of posture overrides: searched grasps are written rounded to 1e-4 rad.
+LIMIT_TOL = 1e-4
 _FIELDS = {"category", "anchor", "grasp", "pregrasp_distance", "postures", "posture_overrides",
            "lift_height", "hold_time", "description"}
 
@@ -90,8 +92,10 @@ def motion_from_spec(spec: dict, annotations: dict | None = None, postures: dict
 def overridden_postures(postures, overrides, where: str = "posture_overrides") -> dict[str, np.ndarray]:
     """``postures`` (name -> 9 joint angles, rad) with ``overrides`` ({posture: {joint: angle (rad)}}) written in.
 
-    Unknown postures or joints, and angles that are not numbers, raise ``InputError`` naming them."""
+    Unknown postures or joints, and angles that are not numbers or outside the joint's limits, raise
+    ``InputError`` naming them."""
     postures = {k: np.array(v, float) for k, v in postures.items()}
+    limits = hand_joint_limits()
     if not isinstance(overrides, dict):
         raise InputError(f"{where}: expected a mapping posture -> {{joint: angle}}")
     for name, joints in overrides.items():
@@ -108,6 +112,9 @@ def overridden_postures(postures, overrides, where: str = "posture_overrides") -
                 angle = float("nan")
             if not np.isfinite(angle):
                 raise InputError(f"{where}.{name}.{joint}: expected an angle in radians, got {value!r}")
+            lo, hi = limits[joint]
+            if not lo - LIMIT_TOL <= angle <= hi + LIMIT_TOL:
+                raise InputError(f"{where}.{name}.{joint} = {angle} rad: outside the joint limits [{lo}, {hi}]")
             postures[name][HAND_ACTUATED_JOINTS.index(joint)] = angle
     return postures
 

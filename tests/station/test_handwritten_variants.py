@@ -54,7 +54,8 @@ def test_a_bad_posture_override_names_the_problem():
     motion = load_handwritten_motion("mug", "mug_03")
     for overrides, message in (({"clenched": {"svh_pinky": 0.5}}, "unknown posture 'clenched'"),
                                ({"closed": {"svh_toe": 0.5}}, "unknown joint 'svh_toe'"),
-                               ({"closed": {"svh_pinky": "lots"}}, "expected an angle in radians")):
+                               ({"closed": {"svh_pinky": "lots"}}, "expected an angle in radians"),
+                               ({"closed": {"svh_pinky": 3.0}}, "outside the joint limits")):
         with pytest.raises(InputError, match=message):
             with_postures(motion, overrides)
 
