@@ -73,6 +73,11 @@ def _missing_fields(r) -> list[str]:
     return [k for k in REQUIRED_FIELDS if k not in r]
 
 
+def _trial_key(record: dict) -> str:
+    """One trial of one method (:data:`TRIAL_KEY`) as a comparable string."""
+    return json.dumps([record.get(f) for f in TRIAL_KEY], default=str)
+
+
 def _validated(records: Iterable[dict], *, unique: bool = False) -> list[dict]:
     records = list(records)
     for i, r in enumerate(records):
@@ -84,7 +89,7 @@ def _validated(records: Iterable[dict], *, unique: bool = False) -> list[dict]:
     if unique:
         seen = set()
         for r in records:
-            k = json.dumps([r.get(f) for f in TRIAL_KEY], default=str)
+            k = _trial_key(r)
             if k in seen:
                 trial = ", ".join(f"{f} {r.get(f)}" for f in TRIAL_KEY)
                 raise InputError(f"the records hold the same trial twice ({trial}); is a records file passed twice?")
@@ -108,15 +113,9 @@ def merged_records(existing: Iterable[dict], new: Iterable[dict]) -> list[dict]:
     """``existing`` with every trial that ``new`` holds replaced by ``new``'s record (same :data:`TRIAL_KEY`),
     in place, and ``new``'s other trials appended: how one category or method is re-run into a records file
     that holds others (``catgrasp benchmark --merge``)."""
-    new = _validated(new, unique=True)
-    key = {json.dumps([r.get(f) for f in TRIAL_KEY], default=str): r for r in new}
-    out, used = [], set()
-    for r in _validated(existing, unique=True):
-        k = json.dumps([r.get(f) for f in TRIAL_KEY], default=str)
-        out.append(key.get(k, r))
-        if k in key:
-            used.add(k)
-    return out + [r for k, r in key.items() if k not in used]
+    rerun = {_trial_key(r): r for r in _validated(new, unique=True)}
+    kept = {_trial_key(r): r for r in _validated(existing, unique=True)}  # dicts keep the file's order
+    return [rerun.get(k, r) for k, r in kept.items()] + [r for k, r in rerun.items() if k not in kept]
 
 
 def _record_files(paths) -> list[Path]:

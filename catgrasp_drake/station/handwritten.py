@@ -94,10 +94,10 @@ def overridden_postures(postures, overrides, where: str = "posture_overrides") -
 
     Unknown postures or joints, and angles that are not numbers or outside the joint's limits, raise
     ``InputError`` naming them."""
-    postures = {k: np.array(v, float) for k, v in postures.items()}
-    limits = hand_joint_limits()
     if not isinstance(overrides, dict):
         raise InputError(f"{where}: expected a mapping posture -> {{joint: angle}}")
+    postures = {k: np.array(v, float) for k, v in postures.items()}
+    limits = hand_joint_limits()
     for name, joints in overrides.items():
         if name not in postures:
             raise InputError(f"{where}: unknown posture {name!r}; have {sorted(postures)}")
