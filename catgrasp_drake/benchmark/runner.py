@@ -426,10 +426,11 @@ def spec_from_record(record: dict, *, data_dir: str | Path = "out/benchmark/data
 
 
 def film_benchmark_trial(record: dict, path: str | Path, *, data_dir: str | Path = "out/benchmark/data",
-                         objects=()):
+                         objects=(), closeup: bool = False):
     """Run the trial of a benchmark ``record`` again through the transfer diagram and film it into ``path``
-    (PNG, :mod:`catgrasp_drake.film`). Returns ``(TransferResult, spec)``; a model file that changed since
-    the record shows in ``spec["model_sha256"] != record["model_sha256"]``."""
+    (PNG, :mod:`catgrasp_drake.film`; ``closeup``: views that follow the functional region). Returns
+    ``(TransferResult, spec)``; a model file that changed since the record shows in
+    ``spec["model_sha256"] != record["model_sha256"]``."""
     from catgrasp_drake.film import film_transfer
     from catgrasp_drake.transfer import make_transfer_diagram
 
@@ -438,4 +439,4 @@ def film_benchmark_trial(record: dict, path: str | Path, *, data_dir: str | Path
     td = make_transfer_diagram(scenario, _model(spec["model"], spec["category"]), view=spec["view"],
                                method=spec["method"], min_confidence=spec["min_confidence"])
     title = f"{spec['instance']} trial {spec['trial']} {spec['method']} ({spec['view']} view)"
-    return film_transfer(td, path, title=title), spec
+    return film_transfer(td, path, title=title, closeup=closeup), spec

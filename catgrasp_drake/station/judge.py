@@ -270,17 +270,23 @@ def points_in_region(points_W, X_WO: np.ndarray, region: dict, margin: float) ->
     return np.all(np.abs(p_O - c) <= h + margin, axis=1)
 
 
-def distance_to_region(points_W, X_WO: np.ndarray, region: dict, margin: float) -> float:
-    """Smallest distance (m) from the world points to the object-frame box grown by ``margin`` (0 inside;
-    inf without points)."""
+def region_offsets(points_W, X_WO: np.ndarray, region: dict, margin: float) -> np.ndarray:
+    """Per point (N, 3): how far (m) each world point lies outside the object-frame box grown by ``margin``,
+    along each object axis, signed (+ beyond the box's upper face on that axis, - below its lower; 0 within)."""
     P = np.asarray(points_W, float).reshape(-1, 3)
-    if len(P) == 0:
-        return math.inf
     c = np.asarray(region["center"], float)
     h = np.maximum(np.asarray(region["half_extents"], float) + margin, 0.0)
     X = np.asarray(X_WO, float)
-    p_O = (P - X[:3, 3]) @ X[:3, :3]
-    return float(np.linalg.norm(np.maximum(np.abs(p_O - c) - h, 0.0), axis=1).min())
+    d = (P - X[:3, 3]) @ X[:3, :3] - c
+    return np.sign(d) * np.maximum(np.abs(d) - h, 0.0)
+
+
+def distance_to_region(points_W, X_WO: np.ndarray, region: dict, margin: float) -> float:
+    """Smallest distance (m) from the world points to the object-frame box grown by ``margin`` (0 inside;
+    inf without points)."""
+    if len(np.asarray(points_W, float).reshape(-1, 3)) == 0:
+        return math.inf
+    return float(np.linalg.norm(region_offsets(points_W, X_WO, region, margin), axis=1).min())
 
 
 def object_partners(contacts, object_model: str) -> set[str]:
@@ -318,9 +324,11 @@ def region_miss_detail(contacts, spec: JudgeSpec, X_WO: np.ndarray, region_name:
     who = by.split("::")[-1]
     if not points:
         return f"{who} does not touch the object"
-    d = distance_to_region(points, X_WO, region, own)
-    return f"{who}'s nearest contact point is {d * 1000:.1f} mm from the {region_name} (needs <= " \
-           f"{spec.surface_margin * 1000:.0f} mm)"
+    off = region_offsets(points, X_WO, region, own)
+    nearest = off[int(np.argmin(np.linalg.norm(off, axis=1)))] * 1000.0
+    where = " ".join(f"{axis} {v:+.1f}" for axis, v in zip("xyz", nearest) if abs(v) >= 0.05) or "inside"
+    return f"{who}'s nearest contact point is {np.linalg.norm(nearest):.1f} mm from the {region_name} (needs <= " \
+           f"{spec.surface_margin * 1000:.0f} mm; outside its box by {where} mm, object frame)"
 
 
 def region_touched(contacts, spec: JudgeSpec, X_WO: np.ndarray, region_name: str, *, by: str) -> bool:

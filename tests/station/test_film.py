@@ -50,3 +50,30 @@ def test_a_grasp_that_cannot_be_planned_films_its_start_and_says_why(tmp_path):
     result = film_grasp(scenario, motion, path, size=(64, 48))
     assert not result.grasp_success and result.plan_status != "ok"
     assert np.asarray(Image.open(path)).shape[1] == 64  # one frame: the start
+
+
+def test_a_closeup_follows_the_functional_region_and_does_not_change_the_trial(tmp_path):
+    """``closeup=True``: one row per close-up view (front, side, below the trigger), and the same outcome."""
+    from catgrasp_drake.film import CLOSEUP_VIEWS
+
+    scenario = with_instance(load_scenario("drill_default"), "drill_00")
+    motion = load_handwritten_motion("drill", "drill_00")
+    path = tmp_path / "closeup.png"
+    filmed = film_grasp(scenario, motion, path, size=(64, 48), closeup=True)
+    assert filmed.outcome() == run_grasp_trial(scenario, motion).outcome()
+    image = np.asarray(Image.open(path))
+    assert image.shape[1] == (1 + len(phase_instants_of(scenario, motion))) * 64
+    assert image.shape[0] > len(CLOSEUP_VIEWS) * 48
+    assert image.shape[0] < (len(CLOSEUP_VIEWS) + 1) * (48 + 24)  # three rows, not the station's two + one
+
+
+def test_a_closeup_of_an_object_without_a_functional_region_says_so(tmp_path):
+    import pytest
+
+    from catgrasp_drake.errors import InputError
+    from catgrasp_drake.film import _film_for
+    from catgrasp_drake.trial import trial_diagram
+
+    station = trial_diagram(load_scenario("cylinder_test")).station
+    with pytest.raises(InputError, match="no annotated functional region"):
+        _film_for(station, True, None)

@@ -96,6 +96,19 @@ def test_index_5mm_beside_the_trigger_is_not_functional():
     v = judge(_spec(), *_snaps(end=(_index(p), THUMB)))
     assert v.grasp_success and not v.functional_success and v.failure_reason == "trigger_missed"
     assert math.isnan(v.trigger_force_N) and "5.0 mm from the trigger" in v.detail
+    assert "outside its box by y -5.0 mm, object frame" in v.detail  # where: behind it, along -y of O
+
+
+def test_the_miss_detail_gives_the_direction_in_the_object_frame():
+    """The object turned 90 deg about z: a point 3 mm above and 4 mm in front (+y of O, -x of W) of the
+    trigger's own box is reported along the object's axes."""
+    X = _X((0.65, 0.0, 0.12), yaw=math.pi / 2)
+    c, h = np.array(TRIGGER["center"]), np.array(TRIGGER["half_extents"]) - 0.004
+    p_O = c + [0.0, h[1] + 0.004, h[2] + 0.003]
+    p_W = X[:3, :3] @ p_O + X[:3, 3]
+    v = judge(_spec(), *_snaps(X_after=X, end=(_index(p_W), THUMB)))
+    assert v.failure_reason == "trigger_missed"
+    assert "5.0 mm from the trigger" in v.detail and "by y +4.0 z +3.0 mm" in v.detail
 
 
 def test_index_on_the_trigger_surface_within_2mm_counts():
