@@ -394,7 +394,8 @@ def _cmd_film(args) -> int:
         record = records[args.index]
         out = Path(args.out or f"out/film/{record['instance']}_t{record['trial']}_{record['method']}.png")
         result, spec = film_benchmark_trial(record, out, data_dir=args.data,
-                                            objects=[args.object] if args.object else (), closeup=args.closeup)
+                                            objects=[args.object] if args.object else (), closeup=args.closeup,
+                                            size=tuple(args.size) if args.size else None)
         then = verdict_word(record["grasp"], record["functional"])
         now = verdict_word(result.grasp_success, result.functional_success)
         same = "" if (then, spec["model_sha256"]) == (now, record["model_sha256"]) else (
@@ -426,7 +427,7 @@ def _cmd_film(args) -> int:
     if args.shift:
         motion = shifted_motion(motion, category, instance, args.shift, annotations_dir=args.object)
     out = Path(args.out or f"out/film/{instance}_handwritten.png")
-    result = film_grasp(scenario, motion, out, closeup=args.closeup)
+    result = film_grasp(scenario, motion, out, closeup=args.closeup, size=tuple(args.size) if args.size else None)
     detail = f": {result.detail}" if result.detail else ""
     print(f"wrote {out}: {verdict_word(result.grasp_success, result.functional_success)} "
           f"({result.failure_reason or 'ok'}{detail})")
@@ -678,6 +679,8 @@ def build_parser() -> argparse.ArgumentParser:
     f.add_argument("--closeup", action="store_true",
                    help="cameras that follow the trigger or handle from 22 cm (front, side, below) instead of the "
                         "station-scale views: where the fingers meet it")
+    f.add_argument("--size", type=_int_at_least(16, 2000), nargs=2, metavar=("W", "H"), default=None,
+                   help="pixels of one frame (default 180 x 180, close-up 300 x 300)")
     f.add_argument("--out", default=None, help="PNG (default: out/film/<instance>_...png)")
     f.set_defaults(func=_cmd_film)
 

@@ -1,6 +1,7 @@
 """Trace one hand-written grasp trial: the object's tilt, rise and hand contacts every few hundredths of a second.
 
     python diagrams/trace_trial.py --category mug --instance mug_09 [--every 0.1] [--start reach] [--stop end]
+    python diagrams/trace_trial.py --object out/ycb/spray_bottle/ycb_022 [--shift DX DY DZ] [--seed N] ...
 
 Where ``catgrasp film`` shows a trial at its phases in pictures, this prints,
 every ``--every`` seconds of simulated time from the start of the phase
@@ -8,8 +9,10 @@ every ``--every`` seconds of simulated time from the start of the phase
 against its pose at the start), its rise (cm) and the hand links touching it
 -- so one can read *when* a grasp goes wrong and which finger did it (e.g. a
 mug that tilts while the fingers close, before anything is lifted). The
-trial is the category's hand-written grasp on the instance at the
-category's default scenario, true-object planner, default physics, run by
+trial is the category's hand-written grasp on the instance (or on an imported
+object, ``--object DIR``; moved by ``--shift``, placed by ``--seed`` as
+``catgrasp film`` does) at the category's default scenario, true-object
+planner, default physics, run by
 ``trial.run_grasp_trial`` (the same motion as an untraced trial's: the
 plant's updates are periodic); its verdict ends the trace.
 """
@@ -20,9 +23,10 @@ import argparse
 
 import numpy as np
 
-from catgrasp_drake.station.handwritten import load_handwritten_motion
+from catgrasp_drake.data.dataset import imported_object
+from catgrasp_drake.station.handwritten import load_handwritten_motion, shifted_motion
 from catgrasp_drake.station.judge import tilt_deg
-from catgrasp_drake.station.scenario import load_scenario, with_instance
+from catgrasp_drake.station.scenario import load_scenario, random_placement, with_instance
 from catgrasp_drake.trial import plan_for, run_grasp_trial, station_snapshot, trial_diagram
 
 PHASES = ("approach", "reach", "close", "lift", "hold", "shake", "press", "end")
@@ -34,8 +38,13 @@ def _short(link: str) -> str:
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--category", required=True, choices=("drill", "spray_bottle", "mug"))
+    parser.add_argument("--category", choices=("drill", "spray_bottle", "mug"),
+                        help="the hand-written grasp's category (or give --object)")
     parser.add_argument("--instance", help="embedded instance (default: the scenario's)")
+    parser.add_argument("--object", metavar="DIR", help="an imported object's directory (catgrasp import-object)")
+    parser.add_argument("--shift", type=float, nargs=3, metavar=("DX", "DY", "DZ"),
+                        help="move the grasp by this much (m, object frame)")
+    parser.add_argument("--seed", type=int, help="a seeded random placement (default: the scenario's pose)")
     parser.add_argument("--every", type=float, default=0.1, help="print interval (s of simulated time)")
     parser.add_argument("--start", default="reach", choices=PHASES)
     parser.add_argument("--stop", default="end", choices=PHASES)
@@ -43,11 +52,24 @@ def main(argv=None) -> int:
     if not args.every > 0:
         parser.error("--every: expected > 0")
 
-    scenario = load_scenario(f"{args.category}_default")
-    if args.instance:
-        scenario = with_instance(scenario, args.instance)
+    category = args.category
+    if args.object:
+        category, name = imported_object(args.object)
+        if args.category not in (None, category):
+            parser.error(f"--category {args.category}: {args.object} holds a {category}")
+        scenario = with_instance(load_scenario(f"{category}_default"), name, category=category, model_dir=args.object)
+    elif category is None:
+        parser.error("give --category (with --instance) or --object DIR")
+    else:
+        scenario = load_scenario(f"{category}_default")
+        if args.instance:
+            scenario = with_instance(scenario, args.instance)
+    if args.seed is not None:
+        scenario = random_placement(scenario, args.seed)
     instance = scenario.object.instance
-    motion = load_handwritten_motion(args.category, instance)
+    motion = load_handwritten_motion(category, instance, annotations_dir=args.object)
+    if args.shift:
+        motion = shifted_motion(motion, category, instance, args.shift, annotations_dir=args.object)
     td = trial_diagram(scenario)  # cached: the trial below runs on this diagram
     plan = plan_for(td, motion.in_world(scenario.X_WO()))  # the trial's own plan, for its timeline
     if not plan.ok:

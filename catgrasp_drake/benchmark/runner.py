@@ -426,9 +426,10 @@ def spec_from_record(record: dict, *, data_dir: str | Path = "out/benchmark/data
 
 
 def film_benchmark_trial(record: dict, path: str | Path, *, data_dir: str | Path = "out/benchmark/data",
-                         objects=(), closeup: bool = False):
+                         objects=(), closeup: bool = False, size: tuple[int, int] | None = None):
     """Run the trial of a benchmark ``record`` again through the transfer diagram and film it into ``path``
-    (PNG, :mod:`catgrasp_drake.film`; ``closeup``: views that follow the functional region). Returns
+    (PNG, :mod:`catgrasp_drake.film`; ``closeup``: views that follow the functional region; ``size`` of a
+    frame, pixels). Returns
     ``(TransferResult, spec)``; a model file that changed since the record shows in
     ``spec["model_sha256"] != record["model_sha256"]``."""
     from catgrasp_drake.film import film_transfer
@@ -439,4 +440,4 @@ def film_benchmark_trial(record: dict, path: str | Path, *, data_dir: str | Path
     td = make_transfer_diagram(scenario, _model(spec["model"], spec["category"]), view=spec["view"],
                                method=spec["method"], min_confidence=spec["min_confidence"])
     title = f"{spec['instance']} trial {spec['trial']} {spec['method']} ({spec['view']} view)"
-    return film_transfer(td, path, title=title, closeup=closeup), spec
+    return film_transfer(td, path, title=title, closeup=closeup, size=size), spec

@@ -59,3 +59,21 @@ def test_a_short_mug_swings_down_during_the_lift(capsys):
 def test_a_nonpositive_interval_is_refused():
     with pytest.raises(SystemExit):
         _trace_main()(["--category", "mug", "--every", "0"])
+
+
+def test_without_a_category_or_an_object_it_says_what_to_give():
+    with pytest.raises(SystemExit):
+        _trace_main()([])
+
+
+def test_an_object_directory_that_is_not_an_imported_object_is_named(tmp_path):
+    from catgrasp_drake.errors import ModelFileError
+
+    with pytest.raises(ModelFileError, match="no such object directory"):
+        _trace_main()(["--object", str(tmp_path / "nothing_here")])
+
+
+def test_the_shift_moves_the_grasp(capsys):
+    """Moved 3 m up, the hand-written drill grasp cannot be planned: the trace says so before any simulation."""
+    assert _trace_main()(["--category", "drill", "--shift", "0", "0", "3"]) == 1
+    assert "plan refused" in capsys.readouterr().out
