@@ -25,7 +25,7 @@ at ``CLOSEUP_DISTANCE_M``, with azimuths measured from the object's own +y
 (its functional direction) at each frame: "front" looks back at the trigger
 from the nozzle or chuck side, "side" from the object's -x side, "below" from
 under the region. Where the fingers meet the trigger or the handle is seen
-at the scale of a finger (an index fingertip sliding off the end of a
+at the scale of a finger (an index fingertip sliding off the side of a
 spray-bottle trigger, say) -- which the station-scale views do not show.
 """
 

@@ -326,7 +326,7 @@ def region_miss_detail(contacts, spec: JudgeSpec, X_WO: np.ndarray, region_name:
         return f"{who} does not touch the object"
     off = region_offsets(points, X_WO, region, own)
     nearest = off[int(np.argmin(np.linalg.norm(off, axis=1)))] * 1000.0
-    where = " ".join(f"{axis} {v:+.1f}" for axis, v in zip("xyz", nearest) if abs(v) >= 0.05) or "inside"
+    where = " ".join(f"{axis} {v:+.1f}" for axis, v in zip("xyz", nearest) if abs(v) >= 0.05) or "0"
     return f"{who}'s nearest contact point is {np.linalg.norm(nearest):.1f} mm from the {region_name} (needs <= " \
            f"{spec.surface_margin * 1000:.0f} mm; outside its box by {where} mm, object frame)"
 
