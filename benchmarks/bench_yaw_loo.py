@@ -73,8 +73,8 @@ def main(argv=None) -> int:
         full_cloud(generate_instance(args.category, np.random.default_rng(
             instance_seed(args.category, i, EXTRA_SEED))).mesh, voxel=CLOUD_VOXEL_M) for i in range(max(args.extra))]
     variance = float(model.params.get("variance", 0.95))
-    W = {j: build_shape_space([clouds[canonical], clouds[j]], canonical_index=0, beta=model.space.beta,
-                              variance=variance).W_train[1] for j in range(len(clouds)) if j != canonical}
+    W = build_shape_space(clouds, canonical_index=canonical, beta=model.space.beta,
+                          variance=variance).W_train  # every CPD canonical -> instance, once
     print(f"{args.category}: {len(names)} committed instances (canonical {names[canonical]}), "
           f"{max(args.extra)} extra shapes, registrations {time.perf_counter() - t0:.1f} s")
     views = []  # (held-out index, p_W, camera_W, X_WT, X_WO)

@@ -403,29 +403,18 @@ def _cmd_film(args) -> int:
                                                if spec["model_sha256"] != record["model_sha256"] else ""))
         print(f"wrote {out}: {now} ({result.failure_reason or 'ok'}){same}")
         return 0
-    from catgrasp_drake.data.dataset import imported_object
     from catgrasp_drake.film import film_grasp, verdict_word
-    from catgrasp_drake.station.handwritten import load_handwritten_motion, shifted_motion
-    from catgrasp_drake.station.scenario import load_scenario, random_placement, with_instance
+    from catgrasp_drake.station.handwritten import handwritten_trial
 
-    if args.object:
-        category, instance = imported_object(args.object)
-        if args.category and args.category != category:
-            raise InputError(f"--category {args.category}: {args.object} holds a {category}")
-    else:
+    instance = None
+    if not args.object:
         if not args.category:
             raise InputError("give --category (with --instance) or --object DIR or --record FILE")
-        category = args.category
-        instances = _check_category(category)
-        instance = args.instance or instances[0]
-        _check_instances(category, [instance], "--instance")
-    scenario = with_instance(load_scenario(f"{category}_default"), instance, category=category,
-                             model_dir=args.object)
-    if args.seed is not None:
-        scenario = random_placement(scenario, args.seed)
-    motion = load_handwritten_motion(category, instance, annotations_dir=args.object)
-    if args.shift:
-        motion = shifted_motion(motion, category, instance, args.shift, annotations_dir=args.object)
+        instance = args.instance or _check_category(args.category)[0]
+        _check_instances(args.category, [instance], "--instance")
+    scenario, motion = handwritten_trial(args.category, instance, object_dir=args.object, seed=args.seed,
+                                         shift_O=args.shift)
+    instance = scenario.object.instance
     out = Path(args.out or f"out/film/{instance}_handwritten.png")
     result = film_grasp(scenario, motion, out, closeup=args.closeup, size=tuple(args.size) if args.size else None)
     detail = f": {result.detail}" if result.detail else ""

@@ -23,10 +23,8 @@ import argparse
 
 import numpy as np
 
-from catgrasp_drake.data.dataset import imported_object
-from catgrasp_drake.station.handwritten import load_handwritten_motion, shifted_motion
+from catgrasp_drake.station.handwritten import handwritten_trial
 from catgrasp_drake.station.judge import tilt_deg
-from catgrasp_drake.station.scenario import load_scenario, random_placement, with_instance
 from catgrasp_drake.trial import plan_for, run_grasp_trial, station_snapshot, trial_diagram
 
 PHASES = ("approach", "reach", "close", "lift", "hold", "shake", "press", "end")
@@ -52,24 +50,11 @@ def main(argv=None) -> int:
     if not args.every > 0:
         parser.error("--every: expected > 0")
 
-    category = args.category
-    if args.object:
-        category, name = imported_object(args.object)
-        if args.category not in (None, category):
-            parser.error(f"--category {args.category}: {args.object} holds a {category}")
-        scenario = with_instance(load_scenario(f"{category}_default"), name, category=category, model_dir=args.object)
-    elif category is None:
+    if args.category is None and args.object is None:
         parser.error("give --category (with --instance) or --object DIR")
-    else:
-        scenario = load_scenario(f"{category}_default")
-        if args.instance:
-            scenario = with_instance(scenario, args.instance)
-    if args.seed is not None:
-        scenario = random_placement(scenario, args.seed)
+    scenario, motion = handwritten_trial(args.category, args.instance, object_dir=args.object, seed=args.seed,
+                                         shift_O=args.shift)
     instance = scenario.object.instance
-    motion = load_handwritten_motion(category, instance, annotations_dir=args.object)
-    if args.shift:
-        motion = shifted_motion(motion, category, instance, args.shift, annotations_dir=args.object)
     td = trial_diagram(scenario)  # cached: the trial below runs on this diagram
     plan = plan_for(td, motion.in_world(scenario.X_WO()))  # the trial's own plan, for its timeline
     if not plan.ok:

@@ -29,12 +29,13 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from catgrasp_drake.data.dataset import load_annotations, read_annotations
+from catgrasp_drake.data.dataset import imported_object, load_annotations, read_annotations
 from catgrasp_drake.errors import InputError, ModelFileError
 from catgrasp_drake.grasping.constraints import load_constraint
 from catgrasp_drake.grasping.motion import GraspMotion
 from catgrasp_drake.grasping.sampling import perturb_poses
 from catgrasp_drake.robot.models import HAND_ACTUATED_JOINTS, hand_joint_limits, load_hand_postures
+from catgrasp_drake.station.scenario import load_scenario, random_placement, with_instance
 
 GRASPS_DIR = Path(__file__).resolve().parents[2] / "models" / "grasps"
 #: Tolerance (rad) of the joint-limit check of posture overrides: searched grasps are written rounded to 1e-4 rad.
@@ -167,3 +168,31 @@ def moved_about(motion: GraspMotion, pivot_O, shift_O, rotate_deg=(0.0, 0.0, 0.0
     T[:3, :3] = Rotation.from_euler("xyz", rotate_deg, degrees=True).as_matrix()
     T[:3, 3] = np.asarray(shift_O, float)
     return replace(motion, poses=perturb_poses(motion.poses, T, np.asarray(pivot_O, float)))
+
+
+def handwritten_trial(category: str | None = None, instance: str | None = None, *, object_dir=None,
+                      seed: int | None = None, shift_O=None):
+    """The scenario and the hand-written grasp (object frame) of one trial: ``(Scenario, GraspMotion)``.
+
+    The object is the embedded ``instance`` of ``category`` (None: the category's default scenario's), or
+    the imported object in ``object_dir`` (``catgrasp import-object``; its category, which ``category`` must
+    match when given); placed by ``seed`` (:func:`~catgrasp_drake.station.scenario.random_placement`; None:
+    the scenario's pose); the grasp moved by ``shift_O`` (m, O; :func:`shifted_motion`). What
+    ``catgrasp film`` and ``diagrams/trace_trial.py`` run."""
+    if object_dir is not None:
+        obj_category, instance = imported_object(object_dir)
+        if category not in (None, obj_category):
+            raise InputError(f"category {category!r}: {object_dir} holds a {obj_category}")
+        category = obj_category
+    elif category is None:
+        raise InputError("give a category (and an instance) or an imported object's directory")
+    scenario = load_scenario(f"{category}_default")
+    if instance is not None:
+        scenario = with_instance(scenario, instance, category=category, model_dir=object_dir)
+    if seed is not None:
+        scenario = random_placement(scenario, seed)
+    instance = scenario.object.instance
+    motion = load_handwritten_motion(category, instance, annotations_dir=object_dir)
+    if shift_O is not None:
+        motion = shifted_motion(motion, category, instance, shift_O, annotations_dir=object_dir)
+    return scenario, motion

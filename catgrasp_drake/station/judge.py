@@ -281,14 +281,6 @@ def region_offsets(points_W, X_WO: np.ndarray, region: dict, margin: float) -> n
     return np.sign(d) * np.maximum(np.abs(d) - h, 0.0)
 
 
-def distance_to_region(points_W, X_WO: np.ndarray, region: dict, margin: float) -> float:
-    """Smallest distance (m) from the world points to the object-frame box grown by ``margin`` (0 inside;
-    inf without points)."""
-    if len(np.asarray(points_W, float).reshape(-1, 3)) == 0:
-        return math.inf
-    return float(np.linalg.norm(region_offsets(points_W, X_WO, region, margin), axis=1).min())
-
-
 def object_partners(contacts, object_model: str) -> set[str]:
     """Model instances (other than the object) in contact with the object."""
     out = set()
