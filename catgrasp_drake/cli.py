@@ -199,12 +199,40 @@ def _cmd_train(args) -> int:
     print(f"simulated trials: {st['trials_simulated']}, functional successes: {st['trials_functional']} "
           f"({100 * rate:.0f} %), instances with a functional success: "
           f"{st['instances_with_functional_success']}/{st['instances']}")
-    reg = st["regression"]
-    print(f"regressor: {reg['regressor']}" + (f" {reg['hyperparameters']}, leave-one-instance-out error at the "
-                                               f"functional point {reg['loo_error_mm']} mm (by family: "
-                                               f"{reg['loo_error_mm_by_family']})" if "loo_error_mm" in reg else ""))
+    _print_regression(st["regression"])
     print(f"latent dimensions q = {st['q']}; time: shape space {st['shape_time_s']} s, trials "
           f"{st['trial_time_s']} s ({st['trials_per_s']} trials/s), total {st['total_time_s']} s")
+    print(f"wrote {out}")
+    return 0
+
+
+def _print_regression(reg: dict) -> None:
+    """How a model's regressor was chosen (``stats["regression"]``), in one or two lines."""
+    loo = reg.get("by_loo_error", reg)
+    if "trial_score_by_candidate" in reg:
+        print(f"regressor: {reg['regressor']} {reg['hyperparameters']}, chosen by {reg['trials']} leave-one-"
+              f"instance-out grasp trials (mean robustness by candidate: {reg['trial_score_by_candidate']})")
+    if "loo_error_mm" in loo:
+        print(f"{'by' if 'trial_score_by_candidate' in reg else 'regressor:'} leave-one-instance-out error at the "
+              f"functional point: {loo['regressor']} {loo['hyperparameters']} {loo['loo_error_mm']} mm (by family: "
+              f"{loo['loo_error_mm_by_family']})")
+    elif "trial_score_by_candidate" not in reg:
+        print(f"regressor: {reg['regressor']}")
+
+
+def _cmd_refit(args) -> int:
+    from catgrasp_drake.category_model import CategoryModel
+    from catgrasp_drake.training import TrainingConfig, refit_regressor
+
+    path = Path(args.model or f"models/trained/{args.category}.npz")
+    model = CategoryModel.load(path, category=args.category)
+    config = TrainingConfig(regressor=args.regressor, workers=args.workers, cache_dir=args.cache, ray=args.ray)
+    print(f"refitting the {args.category} regressor of {path} ({len(model.instances)} training instances): "
+          f"{args.regressor}")
+    model = refit_regressor(model, config, progress=_Progress())
+    out = Path(args.out or path)
+    model.save(out)
+    _print_regression(model.stats["regression"])
     print(f"wrote {out}")
     return 0
 
@@ -552,10 +580,25 @@ def build_parser() -> argparse.ArgumentParser:
     t.add_argument("--perturbations", type=_int_at_least(1, 50), default=2,
                    help="--search: trials per candidate (the first nominal, the others perturbed)")
     t.add_argument("--keep", type=_int_at_least(1, 50), default=3, help="--search: best grasps kept per instance")
-    t.add_argument("--regressor", choices=("ridge", "auto"), default=None,
-                   help="latent -> grasp regressor: ridge, or chosen by leave-one-instance-out "
-                        "(default: auto with --search, ridge without)")
+    t.add_argument("--regressor", choices=("ridge", "auto", "trials"), default=None,
+                   help="latent -> grasp regressor: ridge; auto: chosen by leave-one-instance-out error at the "
+                        "functional point; trials: by leave-one-instance-out grasp trials, the canonical grasp "
+                        "among the candidates (default: auto with --search, ridge without)")
     t.set_defaults(func=_cmd_train)
+
+    r = sub.add_parser("refit", help="choose and fit a trained model's latent -> grasp regressor again from its "
+                                     "stored training set (no grasp search)")
+    r.add_argument("category")
+    r.add_argument("--model", help="model file (default: models/trained/<category>.npz)")
+    r.add_argument("--regressor", choices=("ridge", "auto", "trials"), default="trials",
+                   help="how to choose (see train --regressor; default: trials)")
+    r.add_argument("--out", help="where to write the refitted model (default: over --model)")
+    r.add_argument("--workers", type=_int_at_least(0, MAX_WORKERS), default=None,
+                   help="worker processes for the trials (default: all cores; 0: in this process)")
+    r.add_argument("--cache", default="out/trial_cache", help="trial cache directory (resumes interrupted runs)")
+    r.add_argument("--ray", default=None,
+                   help="run trials on a Ray cluster: 'auto', 'local' or the head's address (extra .[cluster])")
+    r.set_defaults(func=_cmd_refit)
 
     e = sub.add_parser("evaluate", help="the paper's Table I: leave-two-out, full and single views, baselines")
     e.add_argument("category")

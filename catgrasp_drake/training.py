@@ -49,7 +49,16 @@ import numpy as np
 
 from catgrasp_drake.category_model import CategoryModel
 from catgrasp_drake.core.deformation import inverse_warp_poses, warp_poses
-from catgrasp_drake.core.regression import REGRESSOR_GRID, choose_regressor, fit_ridge, instance_means, score_regressors
+from catgrasp_drake.core.regression import (
+    REGRESSOR_GRID,
+    SIMPLICITY,
+    LinearRegressor,
+    choose_regressor,
+    fit_ridge,
+    instance_means,
+    score_regressors,
+    simplest_within_one_se,
+)
 from catgrasp_drake.core.shape_space import build_shape_space
 from catgrasp_drake.data.dataset import (
     imported_object,
@@ -62,7 +71,7 @@ from catgrasp_drake.data.meshes import read_mesh
 from catgrasp_drake.data.pointclouds import full_cloud
 from catgrasp_drake.errors import InputError
 from catgrasp_drake.grasping.constraints import load_constraint
-from catgrasp_drake.grasping.descriptor import descriptor_vector, functional_point
+from catgrasp_drake.grasping.descriptor import descriptor_vector, functional_point, motion_from_descriptor
 from catgrasp_drake.grasping.motion import GraspMotion
 from catgrasp_drake.grasping.robustness import Robustness, perturbation, trial_score
 from catgrasp_drake.grasping.sampling import SamplingParams, perturb_poses, perturbations
@@ -92,6 +101,12 @@ class InstanceSearch:
             raise InputError(f"spread: expected > 0, got {self.spread!r}")
 
 
+#: How the latent -> grasp regressor is chosen: "ridge" (fixed ``ridge_alpha``), "auto" (leave-one-instance-out
+#: error at the functional point, :func:`fit_grasp_regressor`), "trials" (leave-one-instance-out grasp trials,
+#: :func:`choose_regressor_by_trials`).
+REGRESSOR_CHOICES = ("ridge", "auto", "trials")
+
+
 @dataclass(frozen=True)
 class TrainingConfig:
     """Parameters of :func:`train_category` (SI units)."""
@@ -113,14 +128,14 @@ class TrainingConfig:
     ridge_alpha: float = 1.0
     grasp_rotation_radius: float = 0.05  # m; see CategoryModel.grasp_rotation_radius
     search: InstanceSearch | None = None  # None: samples_per_instance random samples (the paper)
-    regressor: str = "ridge"  # "ridge" (with ridge_alpha) or "auto": chosen by leave-one-instance-out
+    regressor: str = "ridge"  # REGRESSOR_CHOICES: "ridge" (with ridge_alpha), "auto" or "trials"
     workers: int | None = None  # None: all cores
     cache_dir: str | None = "out/trial_cache"
     ray: str | None = None  # Ray address ("auto", "local", "host:port") or None: local worker processes
 
     def __post_init__(self):
-        if self.regressor not in ("ridge", "auto"):
-            raise InputError(f"regressor: expected 'ridge' or 'auto', got {self.regressor!r}")
+        if self.regressor not in REGRESSOR_CHOICES:
+            raise InputError(f"regressor: expected one of {', '.join(REGRESSOR_CHOICES)}, got {self.regressor!r}")
 
     def shape_kwargs(self) -> dict:
         kw = {"variance": self.variance}
@@ -354,7 +369,81 @@ def fit_grasp_regressor(X, Y, groups, weights, config: TrainingConfig, template:
     regressor = REGRESSOR_GRID[name][0](x, y, g, **hyper)
     return regressor, {"regressor": name, "hyperparameters": hyper, "loo_error_mm": round(1000 * err, 2),
                        "rule": REGRESSOR_RULE,
-                       "loo_error_mm_by_family": {n: round(1000 * f[2], 2) for n, f in families.items()}}
+                       "loo_error_mm_by_family": {n: round(1000 * f[2], 2) for n, f in families.items()},
+                       "hyperparameters_by_family": {n: f[1] for n, f in families.items()}}
+
+
+#: The candidates of :func:`choose_regressor_by_trials`, simplest first (its one-standard-error rule keeps the
+#: first within one standard error of the best): the category's canonical grasp itself (no learning), then
+#: the families of ``core.regression.REGRESSOR_GRID`` in ``core.regression.SIMPLICITY`` order.
+TRIAL_CANDIDATES = ("canonical", *SIMPLICITY)
+
+
+def canonical_regressor(template: GraspMotion, q: int) -> LinearRegressor:
+    """The regressor that ignores shape and returns the canonical grasp ``template`` (canonical frame)."""
+    d = descriptor_vector(template)
+    return LinearRegressor(coef=np.zeros((len(d), q)), intercept=d, alpha=0.0)
+
+
+def choose_regressor_by_trials(category, space, instances, template, tip_H, X, Y, groups, weights, hyperparameters,
+                               robustness: Robustness, config: TrainingConfig, *, object_dirs=(), progress=None):
+    """The latent -> grasp regressor chosen by grasp trials: ``(regressor, record)``.
+
+    Every candidate of :data:`TRIAL_CANDIDATES` (the families with ``hyperparameters``: name -> dict, e.g. each
+    family's best by leave-one-instance-out error) is trained on all training instances but one and its grasp
+    for the left-out instance -- R(x_i) warped by W(x_i), what the transfer executes under perfect perception
+    -- is scored there by ``robustness`` trials (the search's: nominal placement and seeded perturbations).
+    The candidate kept is the simplest whose mean score is within one standard error of the best (the
+    best's per-instance scores); it is then fitted on every instance. ``"canonical"`` needs no fit and is
+    scored the same way. ``record``: each candidate's per-instance scores and the choice.
+
+    Why: the regressor's error at the functional point measures the distance to the left-out instance's
+    kept grasp, not whether the prediction grasps it; averaging robust per-instance grasps can land off
+    each instance's robust region (the session-12 mug model's mean grasp missed 3 of its 13 training mugs
+    that the canonical grasp holds).
+    """
+    labels, x, y = instance_means(X, Y, groups, weights)
+    labels = [int(v) for v in labels]
+    q = space.latent_train.shape[1]
+    fitted = {}  # (candidate, left-out instance) -> predicted descriptor
+    for i in range(len(instances)):
+        others = [k for k, lab in enumerate(labels) if lab != i]
+        xi = space.latent_train[i]
+        fitted["canonical", i] = descriptor_vector(template)
+        for name in SIMPLICITY:
+            fit = REGRESSOR_GRID[name][0]
+            fitted[name, i] = fit(x[others], y[others], np.arange(len(others)), **hyperparameters[name]).predict(xi)
+    specs, owners = [], []
+    for (name, i), d in fitted.items():
+        canon = motion_from_descriptor(d, template)
+        poses = warp_poses(space.canonical, space.decode(space.latent_train[i]), space.beta, canon.poses,
+                           anchor=tip_H, rotation_radius=config.grasp_rotation_radius)
+        m = GraspMotion(poses, template.pose_names, dict(canon.postures), "object", template.lift_height,
+                        template.hold_time)
+        spec = ({"task": "robust_trial", "scenario": f"{category}_default", "category": category}
+                | _object_key(instances[i], dict(object_dirs)) | {"motion": m.to_dict()})
+        for k in range(robustness.perturbations):
+            specs.append(spec | {"perturbation": perturbation(robustness, instances[i], k)})
+            owners.append((name, i))
+    outcomes = run_tasks(robust_trial_task, specs, cache_dir=config.cache_dir, code_version=trial_code_version(),
+                         workers=config.workers, ray_address=config.ray,
+                         progress=(lambda o, d, t: progress("trials", d, t)) if progress else None)
+    trials: dict[tuple[str, int], list[float]] = {}
+    for key, out in zip(owners, outcomes):
+        trials.setdefault(key, []).append(trial_score(out.result, robustness.grasp_weight))
+    scores = {name: np.array([np.mean(trials[name, i]) for i in range(len(instances))]) for name in TRIAL_CANDIDATES}
+    name = simplest_within_one_se(scores, TRIAL_CANDIDATES)
+    if name == "canonical":
+        regressor, hyper = canonical_regressor(template, q), {}
+    else:
+        hyper = hyperparameters[name]
+        regressor = REGRESSOR_GRID[name][0](x, y, np.arange(len(x)), **hyper)
+    record = {"regressor": name, "hyperparameters": hyper, "rule": "one_se",
+              "trial_score": round(float(np.mean(scores[name])), 4),
+              "trial_scores": {n: [round(float(v), 4) for v in scores[n]] for n in TRIAL_CANDIDATES},
+              "trial_score_by_candidate": {n: round(float(np.mean(scores[n])), 4) for n in TRIAL_CANDIDATES},
+              "trials": len(specs), "instances": list(instances)}
+    return regressor, record
 
 
 def _sampled_training_grasps(category, space, instances, template, config, annotations, tip_H, progress,
@@ -378,17 +467,37 @@ def _sampled_training_grasps(category, space, instances, template, config, annot
     return kept, stats
 
 
-def refit_regressor(model: CategoryModel, config: TrainingConfig = TrainingConfig(regressor="auto")) -> CategoryModel:
-    """``model`` with its regressor fitted again on its own stored training set (no simulation), as
-    ``train_category`` would fit it with ``config`` (e.g. after a change of :data:`REGRESSOR_RULE`);
-    ``stats["regression"]`` is replaced and says so."""
+def _choose_regressor(category, space, instances, template, tip_H, X, Y, groups, weights, config, robustness,
+                      object_dirs, progress):
+    """:func:`fit_grasp_regressor`, then, with ``config.regressor == "trials"``,
+    :func:`choose_regressor_by_trials` among its families: ``(regressor, stats["regression"])``."""
+    regressor, selection = fit_grasp_regressor(X, Y, groups, weights, config, template, tip_H)
+    if config.regressor != "trials" or "hyperparameters_by_family" not in selection:
+        return regressor, selection
+    regressor, by_trials = choose_regressor_by_trials(
+        category, space, instances, template, tip_H, X, Y, groups, weights, selection["hyperparameters_by_family"],
+        robustness, config, object_dirs=object_dirs, progress=progress)
+    return regressor, by_trials | {"chosen_by": "trials", "by_loo_error": selection}
+
+
+def refit_regressor(model: CategoryModel, config: TrainingConfig = TrainingConfig(regressor="auto"),
+                    progress=None) -> CategoryModel:
+    """``model`` with its regressor chosen and fitted again on its own stored training set, as
+    ``train_category`` would with ``config`` (e.g. after a change of :data:`REGRESSOR_RULE`); no grasp
+    search. ``config.regressor == "trials"`` runs the choice's grasp trials (with the robustness
+    perturbations the model was searched with). ``stats["regression"]`` is replaced and says so."""
     if model.training_latent is None:
         raise InputError("refit_regressor: the model file holds no training set")
-    regressor, selection = fit_grasp_regressor(model.training_latent, model.training_descriptors,
-                                               model.training_groups, model.training_weights, config,
-                                               model.template, model.grasp_anchor_H)
+    searched = (model.params.get("search") or {}).get("robustness")
+    robustness = Robustness(**{k: tuple(v) if isinstance(v, list) else v for k, v in searched.items()}) \
+        if searched else Robustness()
+    regressor, selection = _choose_regressor(
+        model.category, model.space, list(model.instances), model.template, np.asarray(model.grasp_anchor_H),
+        model.training_latent, model.training_descriptors, model.training_groups, model.training_weights, config,
+        robustness, model.params.get("objects", {}), progress)
     stats = dict(model.stats) | {"regression": selection | {"refitted": True}}
-    return dataclasses.replace(model, regressor=regressor, stats=stats)
+    params = dict(model.params) | {"regressor": config.regressor}
+    return dataclasses.replace(model, regressor=regressor, stats=stats, params=params)
 
 
 def train_category(
@@ -458,7 +567,9 @@ def train_category(
         groups.append(k.instance_index)
         weights.append(k.weight)
     weights = None if config.search is None else np.array(weights)
-    regressor, selection = fit_grasp_regressor(X, Y, groups, weights, config, template, tip_H)
+    regressor, selection = _choose_regressor(category, space, instances, template, tip_H, X, Y, groups, weights,
+                                             config, (config.search or InstanceSearch()).robustness, object_dirs,
+                                             progress)
     n_sim = sum(s.simulated for s in stats.values())
     summary = {
         "trials_simulated": n_sim,

@@ -315,6 +315,22 @@ def choose_regressor(scored, rule: str = "min") -> tuple[str, dict, float]:
     return best[0], best[1], float(np.mean(best[2]))
 
 
+def simplest_within_one_se(scores: dict, order) -> str:
+    """The first name of ``order`` whose mean score (higher is better) is within one standard error of the
+    best mean (the standard error of the best candidate's per-instance ``scores[name]`` (n,)); ties of the
+    best: the earlier in ``order``. The one-SE rule of :func:`choose_regressor` for scores to maximise."""
+    order = list(order)
+    if not order or any(n not in scores for n in order):
+        raise InputError(f"scores: expected an entry for each of {order}, got {sorted(scores)}")
+    s = {n: real_array(scores[n], f"scores[{n!r}]", "(n,) array").reshape(-1) for n in order}
+    if any(not len(v) or not np.all(np.isfinite(v)) for v in s.values()):
+        raise InputError("scores: every candidate needs finite per-instance scores")
+    best = max(order, key=lambda n: float(np.mean(s[n])))  # max keeps the first of equal means
+    b = s[best]
+    bound = float(np.mean(b)) - (float(np.std(b, ddof=1)) / np.sqrt(len(b)) if len(b) > 1 else 0.0)
+    return next(n for n in order if float(np.mean(s[n])) >= bound - 1e-12)
+
+
 def select_regressor(X, Y, groups, error, names=tuple(REGRESSOR_GRID), rule: str = "min") -> tuple[str, dict, float]:
     """``(name, hyperparameters, LOO error)`` of the candidate (``names`` x their grids) chosen by ``rule``
     (:func:`choose_regressor`) on ``(X, Y, groups)``."""
