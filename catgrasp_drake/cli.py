@@ -143,10 +143,32 @@ class _Progress:
         sys.stderr.flush()
 
 
+def _category_folder(args):
+    """The category folder of ``train --objects FOLDER`` (a folder with category.yaml), else None."""
+    from catgrasp_drake.data.category_folder import CATEGORY_FILE, read_category_folder
+
+    if len(args.objects or ()) != 1 or not (Path(args.objects[0]) / CATEGORY_FILE).is_file():
+        if args.category is None:
+            raise InputError("train: give a category (drill, spray_bottle, mug) or --objects FOLDER with a "
+                             "category.yaml (a new category)")
+        return None
+    cat = read_category_folder(args.objects[0])
+    if args.category not in (None, cat.name, cat.like):
+        raise InputError(f"--objects {args.objects[0]}: a {cat.name!r} category (like {cat.like}), "
+                         f"not {args.category!r}")
+    for flag, value in (("--instances", args.instances), ("--canonical", args.canonical)):
+        if value:
+            raise InputError(f"{flag}: a category folder trains on its own meshes and canonical instance")
+    return cat
+
+
 def _cmd_train(args) -> int:
     from catgrasp_drake.grasping.sampling import SamplingParams
     from catgrasp_drake.training import TrainingConfig, train_category
 
+    folder = _category_folder(args)
+    if folder is not None:
+        args.category = folder.like
     _check_instances(args.category, args.instances)
     if args.instances and len(args.instances) < 2:
         raise InputError(f"--instances: training needs at least 2 instances, got {len(args.instances)}")
@@ -169,6 +191,8 @@ def _cmd_train(args) -> int:
                             canonical_instance=args.canonical, cache_dir=args.cache, ray=args.ray,
                             sampling=SamplingParams(), search=search,
                             regressor=args.regressor or ("auto" if args.search else "ridge"))
+    if folder is not None:
+        return _train_folder(folder, config, args)
     from catgrasp_drake.data.dataset import list_instances
 
     instances = args.instances
@@ -190,6 +214,29 @@ def _cmd_train(args) -> int:
     model = train_category(args.category, instances, config, objects=args.objects, progress=_Progress())
     out = Path(args.out or f"models/trained/{args.category}.npz")
     model.save(out)
+    _print_training(model)
+    print(f"wrote {out}")
+    return 0
+
+
+def _train_folder(folder, config, args) -> int:
+    from catgrasp_drake.training import train_category_folder
+
+    print(f"new category {folder.name!r} (like {folder.like}) from {folder.folder}: {len(folder.meshes)} meshes, "
+          f"canonical {folder.canonical.name}, grasp {folder.grasp.name}")
+    model, imported = train_category_folder(folder.folder, config, progress=_Progress())
+    for obj in imported:
+        region = obj.regions.get(next(iter(obj.regions), ""), {})
+        print(f"  imported {obj.name:<14s} {obj.mass_kg:.3f} kg, {next(iter(obj.regions), 'no region')} at "
+              f"{region.get('center')} -> {obj.directory}")
+    out = Path(args.out or imported[0].directory.parent / f"{folder.name}.npz")
+    model.save(out)
+    _print_training(model)
+    print(f"wrote {out} (a {folder.like} model: catgrasp demo --object {imported[-1].directory} --model {out})")
+    return 0
+
+
+def _print_training(model) -> None:
     st = model.stats
     print(f"{'instance':<18s} {'sampled':>7s} {'constr.':>7s} {'plan':>5s} {'sim':>4s} {'grasp':>5s} {'func.':>5s}")
     for name, s in st["per_instance"].items():
@@ -202,8 +249,6 @@ def _cmd_train(args) -> int:
     _print_regression(st["regression"])
     print(f"latent dimensions q = {st['q']}; time: shape space {st['shape_time_s']} s, trials "
           f"{st['trial_time_s']} s ({st['trials_per_s']} trials/s), total {st['total_time_s']} s")
-    print(f"wrote {out}")
-    return 0
 
 
 def _print_regression(reg: dict) -> None:
@@ -406,7 +451,7 @@ def _cmd_import_object(args) -> int:
     if imported.confidence is not None and imported.confidence < LOW_CONFIDENCE:
         print(f"warning: the fit's confidence {imported.confidence:.2f} is below {LOW_CONFIDENCE}: check {png} "
               "and pass --transform if the alignment is wrong", file=sys.stderr)
-    print(f"use it: catgrasp demo --object {imported.directory}")
+    print(f"use it: catgrasp demo --object {imported.directory}" + (f" --model {args.model}" if args.model else ""))
     return 0
 
 
@@ -557,13 +602,16 @@ def build_parser() -> argparse.ArgumentParser:
     k.set_defaults(func=_cmd_clouds)
 
     t = sub.add_parser("train", help="build a category model (shape space + grasp regressor) by simulated trials")
-    t.add_argument("category")
+    t.add_argument("category", nargs="?", default=None,
+                   help="drill, spray_bottle or mug (optional with --objects FOLDER: a new category)")
     t.add_argument("--instances", nargs="+", help="training instances (default: all embedded ones but --hold-out)")
     t.add_argument("--hold-out", type=_int_at_least(0), default=2,
                    help="leave the category's last N instances out of training (default 2: the demo's novel ones)")
     t.add_argument("--canonical", help="canonical instance (default: the first training instance)")
     t.add_argument("--objects", nargs="+", metavar="DIR", default=(),
-                   help="imported objects (catgrasp import-object) of the category to train on as well")
+                   help="imported objects (catgrasp import-object) of the category to train on as well; or ONE "
+                        "category folder (meshes + category.yaml, docs/import.md): a new category, trained on its "
+                        "meshes alone, written to out/categories/<name>/<name>.npz")
     t.add_argument("--samples", type=_int_at_least(1, MAX_SAMPLES), default=12, help="sampled motions per instance")
     t.add_argument("--seed", type=_int_at_least(0, MAX_SEED), default=0)
     t.add_argument("--workers", type=_int_at_least(0, MAX_WORKERS), default=None,

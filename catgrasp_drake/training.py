@@ -60,6 +60,7 @@ from catgrasp_drake.core.regression import (
     simplest_within_one_se,
 )
 from catgrasp_drake.core.shape_space import build_shape_space
+from catgrasp_drake.data.category_folder import import_category, read_category_folder
 from catgrasp_drake.data.dataset import (
     imported_object,
     instance_clouds,
@@ -128,6 +129,7 @@ class TrainingConfig:
     ridge_alpha: float = 1.0
     grasp_rotation_radius: float = 0.05  # m; see CategoryModel.grasp_rotation_radius
     search: InstanceSearch | None = None  # None: samples_per_instance random samples (the paper)
+    grasp_file: str | None = None  # the canonical grasp; None: models/grasps/<category>_handwritten.yaml
     regressor: str = "ridge"  # REGRESSOR_CHOICES: "ridge" (with ridge_alpha), "auto" or "trials"
     workers: int | None = None  # None: all cores
     cache_dir: str | None = "out/trial_cache"
@@ -540,7 +542,8 @@ def train_category(
         (lambda d, t: progress("shape", d, t)) if progress else None), **config.shape_kwargs())
     t_shape = time.perf_counter() - t0
 
-    template = load_handwritten_motion(category, canonical, annotations_dir=object_dirs.get(canonical))
+    template = load_handwritten_motion(category, canonical, config.grasp_file,
+                                       annotations_dir=object_dirs.get(canonical))
     annotations = {n: read_annotations(Path(object_dirs[n]) / "annotations.json") if n in object_dirs
                    else load_annotations(category, n) for n in instances}
     tip_H = functional_point_in_hand(template, annotations[canonical], load_constraint(category).region)
@@ -598,3 +601,17 @@ def train_category(
                          grasp_rotation_radius=config.grasp_rotation_radius,
                          training_latent=np.array(X), training_descriptors=np.array(Y),
                          training_groups=np.array(groups, np.int64), training_weights=weights)
+
+
+def train_category_folder(folder, config: TrainingConfig = TrainingConfig(), *, objects_out=None,
+                          progress: Callable[[str, int, int], None] | None = None):
+    """A new category from a folder of meshes (``data.category_folder``): every mesh imported into
+    ``objects_out`` (default ``out/categories/<name>``), then Algorithm 1 on those objects alone, with the
+    folder's canonical instance and hand-written grasp. Returns ``(model, imported objects)``; the model is
+    of the like-category (its judge, constraint and postures) and ``params["family"]`` names the new one."""
+    cat = read_category_folder(folder)
+    imported = import_category(cat.folder, out=objects_out)
+    config = dataclasses.replace(config, canonical_instance=imported[0].name, grasp_file=str(cat.grasp))
+    model = train_category(cat.like, [], config, objects=[o.directory for o in imported], progress=progress)
+    family = {"name": cat.name, "like": cat.like, "folder": str(cat.folder), "description": cat.description}
+    return dataclasses.replace(model, params=dict(model.params) | {"family": family}), imported

@@ -62,7 +62,7 @@ from catgrasp_drake.core.rotations import rotation_angle
 from catgrasp_drake.core.shape_space import ShapeSpace
 from catgrasp_drake.data.categories import DENSITY_KG_M3, FUNCTIONAL_REGION, REGION_MARGIN_M
 from catgrasp_drake.data.cloud_io import read_point_cloud
-from catgrasp_drake.data.dataset import CATEGORIES, load_annotations, write_model_files
+from catgrasp_drake.data.dataset import CATEGORIES, load_annotations, read_annotations, write_model_files
 from catgrasp_drake.data.meshes import bridge_gaps, drop_debris, flatten_base, read_mesh, watertight_for_mass
 from catgrasp_drake.data.open3d_import import import_open3d
 from catgrasp_drake.data.pointclouds import full_cloud, voxel_downsample
@@ -109,6 +109,16 @@ class CategoryShape(Protocol):
     category: str
     space: ShapeSpace
     canonical_instance: str
+    params: dict  # "objects": imported training objects' directories by name (a new category's canonical)
+
+
+def canonical_annotations(shape: CategoryShape) -> dict:
+    """The annotations of ``shape``'s canonical instance: an imported object's (a category folder's canonical,
+    ``params["objects"]``) or the embedded data set's."""
+    objects = (getattr(shape, "params", None) or {}).get("objects") or {}
+    if shape.canonical_instance in objects:
+        return read_annotations(Path(objects[shape.canonical_instance]) / "annotations.json")
+    return load_annotations(shape.category, shape.canonical_instance)
 
 
 # ----------------------------------------------------------------------------- transforms
@@ -399,7 +409,7 @@ def transfer_region(shape: CategoryShape, alignment: Alignment, name: str) -> di
     """The canonical instance's ``name`` box carried by the fit into the object's canonical frame (step 5)."""
     if alignment.model_to_canonical is None or alignment.latent is None:
         raise InputError(f"region {name!r}: no category fit to transfer it with; give the region's point")
-    regions = load_annotations(shape.category, shape.canonical_instance).get("regions", {})
+    regions = canonical_annotations(shape).get("regions", {})
     if name not in regions:
         raise InputError(f"the canonical instance {shape.canonical_instance} has no {name!r} region "
                          f"(it has {sorted(regions)})")
@@ -483,13 +493,14 @@ def import_mesh(mesh: trimesh.Trimesh, category: str, name: str, *, model: Categ
                 transform=None, mass_kg: float | None = None, region_point=None, regions: dict | None = None,
                 out=None, source: dict | None = None, observed: np.ndarray | None = None,
                 extra: dict | None = None, what: str = "mesh",
-                base_flatten_m: float = BASE_FLATTEN_M) -> ImportedObject:
+                base_flatten_m: float = BASE_FLATTEN_M, density_kg_m3: float | None = None) -> ImportedObject:
     """Import an in-memory mesh (input frame, metres); see :func:`import_object`.
 
     ``regions``: boxes already in the canonical frame (skips the transfer);
     ``observed``: the points to fit instead of a cloud ray-cast from the mesh;
     ``extra``: more top-level annotation fields (e.g. the YCB table's);
-    ``base_flatten_m``: the base's lowest part cut off flat (module docstring, step 4b; 0: as it is).
+    ``base_flatten_m``: the base's lowest part cut off flat (module docstring, step 4b; 0: as it is);
+    ``density_kg_m3``: without ``mass_kg``, the mass is this density (default: the category's) times the volume.
     """
     functional = FUNCTIONAL_REGION.get(category)
     _check_inputs(category, name, mass_kg, region_point, functional)
@@ -552,7 +563,8 @@ def import_mesh(mesh: trimesh.Trimesh, category: str, name: str, *, model: Categ
         raise InputError(f"{what}: not watertight and hole filling cannot close it, so its volume (and mass) "
                          "is unknown: close it (e.g. Poisson in MeshLab) or give the mass (--mass KG)")
     else:
-        mass, mass_source = DENSITY_KG_M3[category] * volume_m3, "category density x volume"
+        mass, mass_source = ((DENSITY_KG_M3[category] * volume_m3, "category density x volume")
+                             if density_kg_m3 is None else (float(density_kg_m3) * volume_m3, "given density x volume"))
     density = mass / float(solid.volume)
     solid.density = density
     written_mesh = solid if solid_method == "repaired" else canonical
