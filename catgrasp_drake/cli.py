@@ -190,7 +190,7 @@ def _cmd_train(args) -> int:
     config = TrainingConfig(samples_per_instance=args.samples, seed=args.seed, workers=args.workers,
                             canonical_instance=args.canonical, cache_dir=args.cache, ray=args.ray,
                             sampling=SamplingParams(), search=search,
-                            regressor=args.regressor or ("auto" if args.search else "ridge"))
+                            regressor=args.regressor or ("trials" if args.search else "ridge"))
     if folder is not None:
         return _train_folder(folder, config, args)
     from catgrasp_drake.data.dataset import list_instances
@@ -224,11 +224,14 @@ def _train_folder(folder, config, args) -> int:
 
     print(f"new category {folder.name!r} (like {folder.like}) from {folder.folder}: {len(folder.meshes)} meshes, "
           f"canonical {folder.canonical.name}, grasp {folder.grasp.name}")
+    from catgrasp_drake.viz.sheets import import_sheet
+
     model, imported = train_category_folder(folder.folder, config, progress=_Progress())
     for obj in imported:
         region = obj.regions.get(next(iter(obj.regions), ""), {})
+        png = import_sheet(obj.directory, reference_dir=imported[0].directory)
         print(f"  imported {obj.name:<14s} {obj.mass_kg:.3f} kg, {next(iter(obj.regions), 'no region')} at "
-              f"{region.get('center')} -> {obj.directory}")
+              f"{region.get('center')} -> {obj.directory} (check {png.name})")
     out = Path(args.out or imported[0].directory.parent / f"{folder.name}.npz")
     model.save(out)
     _print_training(model)
@@ -631,7 +634,7 @@ def build_parser() -> argparse.ArgumentParser:
     t.add_argument("--regressor", choices=("ridge", "auto", "trials"), default=None,
                    help="latent -> grasp regressor: ridge; auto: chosen by leave-one-instance-out error at the "
                         "functional point; trials: by leave-one-instance-out grasp trials, the canonical grasp "
-                        "among the candidates (default: auto with --search, ridge without)")
+                        "among the candidates (default: trials with --search, ridge without)")
     t.set_defaults(func=_cmd_train)
 
     r = sub.add_parser("refit", help="choose and fit a trained model's latent -> grasp regressor again from its "

@@ -103,20 +103,26 @@ _IMPORT_VIEWS = ((0.0, 10.0), (35.0, 20.0), (0.0, 80.0))  # side (+y right), 3/4
 
 
 def import_sheet(directory: str | os.PathLike, path: str | os.PathLike | None = None, *,
-                 size: tuple[int, int] = (240, 240)) -> Path:
+                 size: tuple[int, int] = (240, 240), reference_dir: str | os.PathLike | None = None) -> Path:
     """The alignment of an imported object (``catgrasp import-object``) at a glance; returns the PNG's path.
 
     Top row: the object in its canonical frame from the side (+x; +y, the
     functional direction, points right), a 3/4 view and from above; bottom
     row: the category's reference instance from the same cameras at the same
-    scale. Functional regions blended in red. Written atomically to ``path``
-    (default ``<directory>/alignment.png``).
+    scale (``reference_dir``: an imported object's directory instead, e.g. a
+    category folder's canonical instance). Functional regions blended in red.
+    Written atomically to ``path`` (default ``<directory>/alignment.png``).
     """
     directory = Path(directory)
     ann = read_annotations(directory / "annotations.json")
     name, category = ann["instance"], ann["category"]
-    ref = REFERENCE_INSTANCE[category]
-    ref_ann = load_annotations(category, ref)
+    if reference_dir is None:
+        ref = REFERENCE_INSTANCE[category]
+        ref_ann, ref_mesh, ref_label = load_annotations(category, ref), instance_mesh_path(category, ref), "embedded"
+    else:
+        ref_ann = read_annotations(Path(reference_dir) / "annotations.json")
+        ref = ref_ann["instance"]
+        ref_mesh, ref_label = Path(reference_dir) / f"{ref}.obj", "canonical"
     lo = np.minimum(ann["bbox_min"], ref_ann["bbox_min"])
     hi = np.maximum(ann["bbox_max"], ref_ann["bbox_max"])
     color = tuple(CATEGORY_COLORS[category]) + (1.0,)
@@ -131,7 +137,7 @@ def import_sheet(directory: str | os.PathLike, path: str | os.PathLike | None = 
     with tempfile.TemporaryDirectory(prefix="catgrasp_import_sheet_") as tmp:
         tmp = Path(tmp)
         for mesh_path, a, label in ((directory / f"{name}.obj", ann, f"{name} (imported)"),
-                                    (instance_mesh_path(category, ref), ref_ann, f"{ref} (embedded)")):
+                                    (ref_mesh, ref_ann, f"{ref} ({ref_label})")):
             for k, view in enumerate(_IMPORT_VIEWS):
                 img = render_mesh(mesh_path, color=color, size=size, azimuth_deg=view[0], elevation_deg=view[1],
                                   bounds=(lo, hi))
@@ -139,6 +145,7 @@ def import_sheet(directory: str | os.PathLike, path: str | os.PathLike | None = 
                 labels.append(label if k == 0 else extra[k - 1] if a is ann else "")
     out = Path(path) if path is not None else directory / "alignment.png"
     regions = ", ".join(ann.get("regions", {})) or "no functional region"
+    kind = ann["family"]["name"] if "family" in ann else category
     contact_sheet(images, labels, out, columns=len(_IMPORT_VIEWS),
-                  title=f"{name} as a {category} ({how}); +y right, z up; red: {regions}")
+                  title=f"{name} as a {kind} ({how}); +y right, z up; red: {regions}")
     return out
