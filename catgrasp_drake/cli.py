@@ -349,9 +349,17 @@ def _cmd_benchmark(args) -> int:
         instances=tuple(args.instances) if args.instances else None, seed=args.seed, noise=not args.no_noise,
         physics=args.physics, min_confidence=args.min_confidence, data_dir=args.data, cache_dir=args.cache,
         workers=args.workers, ray=args.ray)
+    model_paths = None
+    if args.model:  # a user's model (e.g. a category folder's) for their own objects, never the committed tables
+        from catgrasp_drake.category_model import CategoryModel
+
+        if split != "objects":
+            raise InputError(f"--model: only with --objects (the split {split!r} is measured with the committed "
+                             "models)")
+        model_paths = {CategoryModel.load(args.model).category: str(args.model)}
     out = Path(args.out) if args.out else _default_records_path(config)
     kept = load_benchmark_records(out) if args.merge and out.exists() else []  # read (and checked) before the run
-    specs = trial_specs(config)
+    specs = trial_specs(config, model_paths)
     if not specs:
         raise InputError("the selection holds no trials (check --instances and --categories)")
     objects = sorted({(s["category"], s["instance"]) for s in specs})
@@ -361,7 +369,7 @@ def _cmd_benchmark(args) -> int:
           f"depth noise {'on' if config.noise else 'off'})")
     bar = _Progress()
     t0 = time.perf_counter()
-    records = run_benchmark(config, progress=lambda o, done, total: bar("trials", done, total))
+    records = run_benchmark(config, model_paths=model_paths, progress=lambda o, done, total: bar("trials", done, total))
     written = merged_records(kept, records) if args.merge else records
     write_benchmark_records(out, written)
     errors = [r for r in records if r.get("reason") in ("task_error", "worker_died")]
@@ -674,6 +682,9 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--split", choices=("test", "ycb", "smoke", "objects"), default=None,
                    help="test (default): generated from the fixed test seed; ycb: real scans (extra .[ycb]); "
                         "smoke: 2 drills; objects: the --objects")
+    b.add_argument("--model", default=None, metavar="FILE",
+                   help="with --objects: the model of their category to use (e.g. a category folder's, "
+                        "out/categories/<name>/<name>.npz; default: the committed one)")
     b.add_argument("--objects", nargs="+", metavar="DIR", default=None,
                    help="imported objects' directories (catgrasp import-object): the split 'objects'; records go "
                         "to out/benchmark/objects.jsonl")

@@ -13,8 +13,10 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
+from catgrasp_drake.benchmark.report import load_benchmark_records
 from catgrasp_drake.category_model import CategoryModel
 from catgrasp_drake.cli import main
+from catgrasp_drake.core.fileio import file_sha256
 from catgrasp_drake.data.dataset import obj_bytes, read_annotations
 from catgrasp_drake.data.importer import import_object
 
@@ -49,6 +51,17 @@ def test_train_a_new_category_from_a_folder_then_import_a_new_member_with_its_mo
     got = np.asarray(new.regions["handle"]["center"])
     assert np.abs(got - (centre - [0, 0, 0.003])).max() < 0.006, got  # the handle found (base cut 3 mm)
     assert new.mesh.bounds[0][2] > -1e-6 and new.mesh.extents[2] > 0.1  # standing upright
+    # the family's own objects through the benchmark's transfer diagram, with the family's model
+    records = tmp_path / "records.jsonl"
+    code = main(["benchmark", "--objects", str(tmp_path / "out/categories/tankard/tankard_c"), "--model",
+                 str(model_path), "--methods", "latent", "--placements", "1", "--out", str(records), "--cache",
+                 str(tmp_path / "bcache"), "--workers", "0"])
+    out = capsys.readouterr().out
+    assert code == 0, out
+    rec = load_benchmark_records(records)
+    assert len(rec) == 1 and rec[0]["model_sha256"] == file_sha256(model_path) and rec[0]["instance"] == "tankard_c"
+    assert main(["benchmark", "--categories", "mug", "--model", str(model_path)]) == 2
+    assert "--model: only with --objects" in capsys.readouterr().err
     # a wrong category name for the folder is a one-line error
     assert main(["train", "drill", "--objects", str(EXAMPLE)]) == 2
     assert "a 'tankard' category (like mug), not 'drill'" in capsys.readouterr().err
