@@ -34,7 +34,12 @@ of cached trials per round, on local workers or Ray. Each instance keeps its
 best ``keep`` candidates with at least one functional trial, weighted by
 their score; the regressor is then ``regressor`` -- ``"auto"`` chooses among
 mean, nearest instance, ridge and kernel ridge by leave-one-instance-out
-error at the functional point (``core.regression.select_regressor``).
+error at the functional point (``core.regression.select_regressor``),
+``"trials"`` among those and the canonical grasp itself by leave-one-instance-out
+grasp trials (:func:`choose_regressor_by_trials`).
+
+A new category from a folder of meshes (``data.category_folder``) is trained
+by :func:`train_category_folder`: its meshes imported, then this on them alone.
 """
 
 from __future__ import annotations
