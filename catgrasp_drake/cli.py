@@ -359,7 +359,7 @@ def _cmd_benchmark(args) -> int:
         model_paths = {CategoryModel.load(args.model).category: str(args.model)}
     out = Path(args.out) if args.out else _default_records_path(config)
     kept = load_benchmark_records(out) if args.merge and out.exists() else []  # read (and checked) before the run
-    specs = trial_specs(config, model_paths)
+    specs = trial_specs(config, model_paths=model_paths)
     if not specs:
         raise InputError("the selection holds no trials (check --instances and --categories)")
     objects = sorted({(s["category"], s["instance"]) for s in specs})

@@ -245,7 +245,8 @@ def test_benchmark_merge_rewrites_only_the_rerun_trials(tmp_path, monkeypatch):
     out = tmp_path / "test.jsonl"
     write_benchmark_records(out, [record("drill", 0, True), record("mug", 0, False), record("mug", 1, False)])
     rerun = [record("mug", 0, True), record("mug", 1, True), record("mug", 2, True)]
-    monkeypatch.setattr(runner, "trial_specs", lambda config: [{"category": "mug", "instance": "mug_00", "trial": 0}])
+    monkeypatch.setattr(runner, "trial_specs",
+                        lambda config, **kw: [{"category": "mug", "instance": "mug_00", "trial": 0}])
     monkeypatch.setattr(runner, "run_benchmark", lambda config, **kw: list(rerun))
     args = ["benchmark", "--categories", "mug", "--methods", "latent", "--out", str(out)]
     assert main(args + ["--merge"]) == 0
