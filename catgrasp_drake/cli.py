@@ -221,11 +221,10 @@ def _cmd_train(args) -> int:
 
 def _train_folder(folder, config, args) -> int:
     from catgrasp_drake.training import train_category_folder
+    from catgrasp_drake.viz.sheets import import_sheet
 
     print(f"new category {folder.name!r} (like {folder.like}) from {folder.folder}: {len(folder.meshes)} meshes, "
           f"canonical {folder.canonical.name}, grasp {folder.grasp.name}")
-    from catgrasp_drake.viz.sheets import import_sheet
-
     model, imported = train_category_folder(folder.folder, config, progress=_Progress())
     for obj in imported:
         region = obj.regions.get(next(iter(obj.regions), ""), {})
@@ -456,7 +455,9 @@ def _cmd_import_object(args) -> int:
     t0 = time.perf_counter()
     from catgrasp_drake.viz.sheets import import_sheet
 
-    png = import_sheet(imported.directory)
+    folder_canonical = ((model.params.get("objects") or {}).get(model.canonical_instance)
+                        if model is not None else None)  # a category folder's model: its own canonical
+    png = import_sheet(imported.directory, reference_dir=folder_canonical)
     print(f"wrote {imported.directory}/ ({imported.name}.obj, {imported.name}.sdf, annotations.json) and {png} "
           f"in {t_import + time.perf_counter() - t0:.1f} s")
     if imported.confidence is not None and imported.confidence < LOW_CONFIDENCE:
