@@ -126,3 +126,31 @@ def _warped(model, descriptor, k):
     poses = warp_poses(model.space.canonical, model.space.decode(model.space.latent_train[k]), model.space.beta,
                        m.poses, **model.warp_options())
     return GraspMotion(poses, m.pose_names, dict(m.postures), "object", m.lift_height, m.hold_time)
+
+
+def test_refit_by_trials_records_both_choices_and_the_cli_writes_the_model(mug_model, monkeypatch, tmp_path, capsys):
+    """``refit_regressor(..., regressor="trials")`` runs the choice with the robustness the model was searched with
+    and keeps the functional-point choice it replaced; ``catgrasp refit`` writes the result where asked."""
+    calls = []
+
+    def fake_run_tasks(fn, specs, **kw):
+        calls.append(specs)
+        return [TaskOutcome(key="", spec=s, result={"functional": True, "grasp": True}, cached=False) for s in specs]
+
+    monkeypatch.setattr(training, "run_tasks", fake_run_tasks)
+    again = training.refit_regressor(mug_model, training.TrainingConfig(regressor="trials", cache_dir=None))
+    reg = again.stats["regression"]
+    assert reg["chosen_by"] == "trials" and reg["refitted"] and reg["regressor"] == "canonical"  # all tie: simplest
+    assert reg["by_loo_error"]["regressor"] == "mean" and "loo_error_mm" in reg["by_loo_error"]
+    searched = mug_model.params["search"]["robustness"]["perturbations"]
+    assert len(calls[0]) == 5 * len(mug_model.instances) * searched
+    assert again.params["regressor"] == "trials"
+    # the CLI, choosing by the functional-point error (no trials), on a copy of the committed model
+    from catgrasp_drake.cli import main
+
+    out = tmp_path / "mug.npz"
+    assert main(["refit", "mug", "--regressor", "auto", "--out", str(out)]) == 0
+    assert "leave-one-instance-out error at the functional point: mean" in capsys.readouterr().out
+    refitted = CategoryModel.load(out, category="mug")
+    assert refitted.stats["regression"]["regressor"] == "mean" and refitted.regressor.kind == "ridge"
+    assert main(["refit", "drill", "--model", str(out)]) == 2  # a mug model is not a drill model
