@@ -1,9 +1,9 @@
 """A new category from a folder of meshes, measured on members it never saw (docs/import.md).
 
-    python benchmarks/bench_category_folder.py [--held-out 4] [--placements 3] [--search]
+    python benchmarks/bench_category_folder.py [--folder DIR] [--held-out 4] [--placements 3] [--search]
 
 1. Train the example category ``models/examples/tankards`` (3 tankards, one
-   hand-written grasp) with ``catgrasp train --objects`` (``--search``: the
+   hand-written grasp; ``--folder``: another folder of tankards) with ``catgrasp train --objects`` (``--search``: the
    per-instance robustness search and the regressor chosen by trials; else
    ``--samples`` random motions per tankard).
 2. Generate ``--held-out`` new tankards from a seeded range of proportions
@@ -66,6 +66,7 @@ def held_out_tankards(n: int, seed: int = SEED):
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--folder", type=Path, default=EXAMPLE, help="the category folder (default: the tankards)")
     ap.add_argument("--held-out", type=int, default=4)
     ap.add_argument("--placements", type=int, default=3)
     ap.add_argument("--samples", type=int, default=4, help="without --search: random motions per tankard")
@@ -79,7 +80,7 @@ def main() -> int:
         config = TrainingConfig(samples_per_instance=args.samples, search=search, workers=args.workers,
                                 regressor="trials" if args.search else "ridge", cache_dir=str(tmp / "cache"))
         t0 = time.perf_counter()
-        model, imported = train_category_folder(EXAMPLE, config, objects_out=tmp / "tankard")
+        model, imported = train_category_folder(args.folder, config, objects_out=tmp / "tankard")
         st = model.stats
         path = tmp / "tankard.npz"
         model.save(path)
