@@ -412,11 +412,12 @@ def choose_regressor_by_trials(category, space, instances, template, tip_H, X, Y
     labels, x, y = instance_means(X, Y, groups, weights)
     labels = [int(v) for v in labels]
     q = space.latent_train.shape[1]
+    canonical = descriptor_vector(template)
     fitted = {}  # (candidate, left-out instance) -> predicted descriptor
     for i in range(len(instances)):
         others = [k for k, lab in enumerate(labels) if lab != i]
         xi = space.latent_train[i]
-        fitted["canonical", i] = descriptor_vector(template)
+        fitted["canonical", i] = canonical
         for name in SIMPLICITY:
             fit = REGRESSOR_GRID[name][0]
             fitted[name, i] = fit(x[others], y[others], np.arange(len(others)), **hyperparameters[name]).predict(xi)

@@ -49,6 +49,8 @@ from catgrasp_drake.data.importer import (
     DEFAULT_HALF_EXTENTS_M,
     MESH_SUFFIXES,
     ImportedObject,
+    box_around,
+    box_points,
     default_name,
     import_mesh,
     parse_transform,
@@ -178,15 +180,8 @@ def transfer_region_by_cpd(canonical_points, region: dict, instance_points, *, b
     """``region`` (a box on the canonical shape) carried onto an instance: non-rigid CPD from
     ``canonical_points`` (M, 3) to ``instance_points`` (N, 3), both in the category's canonical frame (m),
     the box's corners and centre deformed by the fitted field; the deformed corners' axis-aligned box."""
-    c, h = np.asarray(region["center"], float), np.asarray(region["half_extents"], float)
-    signs = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)], float)
-    pts = np.vstack([c + signs * h, c])
     r = nonrigid_cpd(canonical_points, instance_points, beta=beta)
-    moved = deform_points(canonical_points, r.W, beta, pts)
-    lo, hi = moved[:8].min(axis=0), moved[:8].max(axis=0)
-    return {"center": [round(float(v), 6) for v in (lo + hi) / 2],
-            "half_extents": [round(float(v), 6) for v in (hi - lo) / 2],
-            "deformed_center": [round(float(v), 6) for v in moved[8]]}
+    return box_around(deform_points(canonical_points, r.W, beta, box_points(region)))
 
 
 def import_category(folder, out=None) -> list[ImportedObject]:

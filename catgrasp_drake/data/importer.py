@@ -109,12 +109,11 @@ class CategoryShape(Protocol):
     category: str
     space: ShapeSpace
     canonical_instance: str
-    params: dict  # "objects": imported training objects' directories by name (a new category's canonical)
 
 
 def canonical_annotations(shape: CategoryShape) -> dict:
     """The annotations of ``shape``'s canonical instance: an imported object's (a category folder's canonical,
-    ``params["objects"]``) or the embedded data set's."""
+    named in the model's optional ``params["objects"]``) or the embedded data set's."""
     objects = (getattr(shape, "params", None) or {}).get("objects") or {}
     if shape.canonical_instance in objects:
         return read_annotations(Path(objects[shape.canonical_instance]) / "annotations.json")
@@ -414,20 +413,28 @@ def transfer_region(shape: CategoryShape, alignment: Alignment, name: str) -> di
         raise InputError(f"the canonical instance {shape.canonical_instance} has no {name!r} region "
                          f"(it has {sorted(regions)})")
     box = regions[name]
-    c, h = np.asarray(box["center"], float), np.asarray(box["half_extents"], float)
-    signs = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)], float)
-    pts = np.vstack([c + signs * h, c])
     W = shape.space.decode(alignment.latent)
-    deformed = deform_points(shape.space.canonical, W, shape.space.beta, pts)
+    deformed = deform_points(shape.space.canonical, W, shape.space.beta, box_points(box))
     R, t, s = alignment.model_to_canonical
     mapped = s * deformed @ np.asarray(R).T + np.asarray(t)
-    lo, hi = mapped[:8].min(axis=0), mapped[:8].max(axis=0)
     grown = float(box.get("grown_by", REGION_MARGIN_M.get(name, 0.0)))
+    return box_around(mapped) | {"grown_by": round(grown * s, 6), "transferred_from": shape.canonical_instance}
+
+
+def box_points(box: dict) -> np.ndarray:
+    """The 8 corners, then the centre, of an axis-aligned region box (``center``, ``half_extents``; m): (9, 3)."""
+    c, h = np.asarray(box["center"], float), np.asarray(box["half_extents"], float)
+    signs = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)], float)
+    return np.vstack([c + signs * h, c])
+
+
+def box_around(points: np.ndarray) -> dict:
+    """The axis-aligned box of :func:`box_points` moved by some map (``points`` (9, 3)): its centre and
+    half-extents from the moved corners, and where the moved centre went (``deformed_center``)."""
+    lo, hi = points[:8].min(axis=0), points[:8].max(axis=0)
     return {"center": [round(float(v), 6) for v in (lo + hi) / 2],
             "half_extents": [round(float(v), 6) for v in (hi - lo) / 2],
-            "grown_by": round(grown * s, 6),
-            "transferred_from": shape.canonical_instance,
-            "deformed_center": [round(float(v), 6) for v in mapped[8]]}
+            "deformed_center": [round(float(v), 6) for v in points[8]]}
 
 
 def point_region(name: str, point_canonical) -> dict:
