@@ -35,7 +35,7 @@ from catgrasp_drake.planning.records import GraspPlan, PlanParams, hold_plan
 from catgrasp_drake.robot.models import HAND_BASE_LINK, INDEX_DISTAL_LINK, load_hand_postures
 from catgrasp_drake.runner import code_fingerprint
 from catgrasp_drake.station.builder import StationHandles, add_station, apply_context_knobs, posture_category
-from catgrasp_drake.station.judge import ContactRecord, JudgeSpec, Snapshot, Verdict, judge
+from catgrasp_drake.station.judge import ContactRecord, JudgeSpec, Snapshot, Verdict, decided_failure, judge
 from catgrasp_drake.station.scenario import Scenario
 from catgrasp_drake.systems.grasp_execution import PlanPlayback
 
@@ -239,14 +239,15 @@ def pose_tuple(X: np.ndarray) -> tuple:
 
 def run_grasp_trial(scenario: Scenario, motion_O: GraspMotion, *, meshcat: Meshcat | None = None,
                     record_html: str | Path | None = None, params: PlanParams = PlanParams(),
-                    on_phase=None, instants=None) -> TrialResult:
+                    on_phase=None, instants=None, stop_when_decided: bool | None = None) -> TrialResult:
     """Execute ``motion_O`` (hand control poses in the OBJECT frame) on the scenario's object.
 
     With ``meshcat`` the run is recorded on it (MeshcatVisualizer recording);
     with ``record_html`` as well, the recording is written there as one
     self-contained HTML file. ``on_phase(label, root_context)`` is called
-    at the phases of the motion, or at ``instants`` (:func:`simulate_and_judge`). Returns a
-    :class:`TrialResult`; never raises for a failed grasp.
+    at the phases of the motion, or at ``instants``; ``stop_when_decided``: end
+    the run where a failure is decided (default: when nothing watches it), both as
+    in :func:`simulate_and_judge`. Returns a :class:`TrialResult`; never raises for a failed grasp.
     """
     if not isinstance(motion_O, GraspMotion):
         raise InputError(f"motion_O: expected a GraspMotion, got {type(motion_O).__name__}")
@@ -286,7 +287,8 @@ def run_grasp_trial(scenario: Scenario, motion_O: GraspMotion, *, meshcat: Meshc
     td.generator.set_plan(td.generator.GetMyMutableContextFromRoot(context), plan)
     verdict, X_final, end, sim_time = simulate_and_judge(td.diagram, context, td.station, plan.timeline, spec,
                                                          meshcat=meshcat, record_html=record_html,
-                                                         on_phase=on_phase, instants=instants)
+                                                         on_phase=on_phase, instants=instants,
+                                                         stop_when_decided=stop_when_decided)
     return result(verdict, X_final, end, sim_time)
 
 
@@ -308,7 +310,8 @@ def phase_instants(timeline) -> tuple[tuple[str, float], ...]:
 
 def simulate_and_judge(diagram, context, station: StationHandles, timeline, spec: JudgeSpec, *,
                        meshcat: Meshcat | None = None, record_html=None, initialize_params=None,
-                       max_wall_s: float = MAX_TRIAL_WALL_S, on_phase=None, instants=None):
+                       max_wall_s: float = MAX_TRIAL_WALL_S, on_phase=None, instants=None,
+                       stop_when_decided: bool | None = None):
     """Simulate ``diagram`` from ``context`` to ``timeline.end`` and judge the grasp.
 
     Snapshots are taken at the start, at ``timeline.close``, ``timeline.hold``
@@ -323,7 +326,15 @@ def simulate_and_judge(diagram, context, station: StationHandles, timeline, spec
     stops at every instant of :func:`phase_instants` -- or of ``instants``,
     ``(label, t)`` pairs in time order -- and calls it there (a film, a trace;
     the simulated motion is the same: the plant's updates are periodic).
-    Returns ``(verdict, X_WO_final, end_snapshot or None, simulated_time_s)``.
+    ``stop_when_decided``: stop at the first snapshot after which the judge's
+    verdict is a decided failure (:func:`~catgrasp_drake.station.judge.decided_failure`:
+    knocked away before closing, not lifted or dropped by the end of the hold,
+    shaken loose) -- the same success flags, reason and detail as the full run,
+    with the object's rise, tilt and final pose measured where the run stopped.
+    None (default): stop only when nothing watches the run (no ``on_phase``, no
+    Meshcat recording); a film or a recording shows the whole motion.
+    Returns ``(verdict, X_WO_final, end_snapshot or None, simulated_time_s)``;
+    the "end" snapshot is the last one taken.
     """
     apply_context_knobs(station, context)
     simulator = Simulator(diagram, context)
@@ -349,6 +360,9 @@ def simulate_and_judge(diagram, context, station: StationHandles, timeline, spec
 
     simulator.set_monitor(monitor)
     visualizer = station.meshcat_visualizer
+    if stop_when_decided is None:
+        stop_when_decided = on_phase is None and visualizer is None
+    early = None
     if visualizer is not None:
         visualizer.DeleteRecording()
         visualizer.StartRecording(False)
@@ -364,9 +378,12 @@ def simulate_and_judge(diagram, context, station: StationHandles, timeline, spec
         before_close = station_snapshot(station, context)
         snapshots = []
         for t in (timeline.hold, timeline.shake, timeline.press, timeline.end):
+            if stop_when_decided:
+                early = decided_failure(spec, initial, before_close, *snapshots)
+                if early is not None:
+                    break
             advance_to(t)
             snapshots.append(station_snapshot(station, context))
-        after_lift, after_hold, after_shake, end = snapshots
     except RuntimeError as e:  # a solver failure inside the plant: report, never raise
         X = station.plant.EvalBodyPoseInWorld(station.plant.GetMyContextFromRoot(context),
                                               station.object_body).GetAsMatrix4()
@@ -379,7 +396,11 @@ def simulate_and_judge(diagram, context, station: StationHandles, timeline, spec
             visualizer.PublishRecording()
             if record_html is not None and meshcat is not None:
                 atomic_write_text(record_html, meshcat.StaticHtml())
-    verdict = judge(spec, initial, before_close, after_lift, after_hold, after_shake, end)
+    if early is not None:
+        last = snapshots[-1] if snapshots else before_close
+        return early, last.X_WO, last, context.get_time()
+    verdict = judge(spec, initial, before_close, *snapshots)
+    end = snapshots[-1]
     return verdict, end.X_WO, end, context.get_time()
 
 

@@ -73,6 +73,11 @@ Rules (first failing rule names ``failure_reason``):
      scanned bottle without a trigger): ``no_functional_region`` (grasped,
      functional success undefined, counted as not functional).
 
+A trial need not run past a decided failure: :func:`decided_failure` gives the
+verdict that the snapshots taken so far already decide (rules 1-3, and an object
+not lifted ``min_rise`` by the end of the lift), and ``catgrasp_drake.trial``
+stops there unless something watches the run (a film, a recording).
+
 The :class:`Verdict` records what was measured: ``object_rise_m`` and
 ``tilt_deg`` at the end, ``in_hand_shift_m``/``in_hand_turn_deg`` (the
 largest over the hold, shake and press), ``trigger_force_N`` (along the
@@ -349,17 +354,44 @@ def judge(spec: JudgeSpec, initial: Snapshot, before_close: Snapshot, after_lift
 
     ``after_lift``, ``after_hold``, ``after_shake`` and ``end`` need the hand pose ``X_WH``.
     """
+    return _rules(spec, initial, before_close, after_lift, after_hold, after_shake, end)
+
+
+def decided_failure(spec: JudgeSpec, initial: Snapshot, before_close: Snapshot, after_lift: Snapshot | None = None,
+                    after_hold: Snapshot | None = None, after_shake: Snapshot | None = None) -> Verdict | None:
+    """The failure verdict that the snapshots taken so far already decide, or None (not decided yet).
+
+    A trial may stop there: rules 1-3 look at no later snapshot, so the full run's
+    :func:`judge` would give the same success flags, reason and detail. Rule 2 needs
+    ``after_hold`` too, except for an object not lifted ``min_rise`` by the end of the
+    lift: every branch of rule 2 fails it, so it is decided then, with the contacts at
+    the end of the lift standing for those at the end of the hold (the flags are the
+    full run's; the reason can differ only among ``not_lifted``, ``lifted_short`` and
+    ``touched_other``). What the verdict measures (rise, tilt, in-hand motion) is
+    measured at the last snapshot given, and there is no trigger force.
+    """
+    if after_lift is not None and after_hold is None:
+        rise = float(np.asarray(after_lift.X_WO)[2, 3]) - float(np.asarray(initial.X_WO)[2, 3])
+        if rise < spec.min_rise:
+            after_hold = after_lift
+    return _rules(spec, initial, before_close, after_lift, after_hold, after_shake, None)
+
+
+def _rules(spec, initial, before_close, after_lift, after_hold, after_shake, end) -> Verdict | None:
+    """:func:`judge` on the snapshots given; a missing one (None) ends the rules there with None."""
+    last = next(s for s in (end, after_shake, after_hold, after_lift, before_close) if s is not None)
     z0 = float(np.asarray(initial.X_WO)[2, 3])
-    rise_lift = float(np.asarray(after_lift.X_WO)[2, 3]) - z0
-    rise_end = float(np.asarray(end.X_WO)[2, 3]) - z0
-    tilt = tilt_deg(initial.X_WO, end.X_WO)
+    rise_lift = float(np.asarray(after_lift.X_WO)[2, 3]) - z0 if after_lift is not None else math.nan
+    rise_end = float(np.asarray(last.X_WO)[2, 3]) - z0
+    tilt = tilt_deg(initial.X_WO, last.X_WO)
     motion = {name: in_hand_motion(after_lift, s)
-              for name, s in (("hold", after_hold), ("shake", after_shake), ("press", end))}
-    shift = max(m[0] for m in motion.values())
-    turn = max(m[1] for m in motion.values())
+              for name, s in (("hold", after_hold), ("shake", after_shake), ("press", end))
+              if s is not None and after_lift is not None and s is not after_lift}
+    shift = max((m[0] for m in motion.values()), default=math.nan)
+    turn = max((m[1] for m in motion.values()), default=math.nan)
     force = math.nan
     trigger_region = spec.regions.get("trigger") if spec.category in ("drill", "spray_bottle") else None
-    if trigger_region is not None:
+    if trigger_region is not None and end is not None:
         force = trigger_force(end.contacts, spec, end.X_WO)
 
     def verdict(grasp, functional, reason, detail=""):
@@ -387,6 +419,8 @@ def judge(spec: JudgeSpec, initial: Snapshot, before_close: Snapshot, after_lift
                        f"(turned {turned:.0f} deg) before closing")
 
     # 2. lift and hold
+    if after_lift is None or after_hold is None:
+        return None
     partners = object_partners(after_hold.contacts, spec.object_model)
     lifted = rise_lift >= spec.min_rise
     rise_text = f"rise {rise_lift * 100:.1f} cm at the end of the lift (needs {spec.min_rise * 100:.0f} cm)"
@@ -412,6 +446,8 @@ def judge(spec: JudgeSpec, initial: Snapshot, before_close: Snapshot, after_lift
 
     # 3. the disturbance (shake), 4. the press
     for phase, snapshot, reason in (("shake", after_shake, "shaken_loose"), ("press", end, "slipped_on_press")):
+        if snapshot is None:
+            return None
         partners = object_partners(snapshot.contacts, spec.object_model)
         if spec.hand_model not in partners:
             return verdict(False, False, reason, f"dropped during the {phase}")

@@ -137,7 +137,7 @@ def test_smoke_benchmark_runs_the_transfer_diagram_and_records_every_trial(tmp_p
         assert r["reason"] not in ("task_error", "worker_died"), r["detail"]
         assert r["plan_status"] == "ok"
         assert r["num_points"] > 300 and 0 < r["confidence"] <= 1
-        assert r["timings"]["simulated_s"] > 5
+        assert r["timings"]["simulated_s"] > 2.5  # at least to the closing (a failed grasp stops where decided)
         assert r["pose_error_mm"] < 30  # the fit found the drill
         assert abs(r["yaw_error_deg"]) < 20  # ... the right way round
         assert r["posterior"]["hypotheses"] >= 1 and r["posterior"]["tried"] >= 1

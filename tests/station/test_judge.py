@@ -12,6 +12,7 @@ from catgrasp_drake.station.judge import (
     ContactRecord,
     JudgeSpec,
     Snapshot,
+    decided_failure,
     in_hand_motion,
     judge,
     points_in_region,
@@ -327,3 +328,40 @@ def test_region_and_tilt_helpers():
 def test_missing_functional_region_is_an_outcome_not_an_exception():
     v = judge(_spec(regions={}), *_snaps())
     assert v.grasp_success and not v.functional_success and v.failure_reason == "no_functional_region"
+
+
+# ----------------------------------------------------------------------------- a trial stopped when decided
+def _decided_at(spec, snaps):
+    """(stage, verdict): the first prefix of the snapshots after which ``decided_failure`` gives a verdict,
+    as a trial that stops when decided would see them (stage 1: before closing, 2: end of the lift,
+    3: end of the hold, 4: end of the shake)."""
+    initial, before_close, *later = snaps
+    for stage, n_later in ((1, 0), (2, 1), (3, 2), (4, 3)):
+        v = decided_failure(spec, initial, before_close, *later[:n_later])
+        if v is not None:
+            return stage, v
+    return None, None
+
+
+@pytest.mark.parametrize("snaps, stage", [
+    (_snaps(X_before=_X((0.70, 0.0, 0.0))), 1),  # pushed 5 cm before closing
+    (_snaps(X_after=X0, hold=ON_TABLE), 2),  # never left the table: decided at the end of the lift
+    (_snaps(X_after=_X((0.65, 0.0, 0.08))), 2),  # held 8 cm up: lifted short
+    (_snaps(X_hold=_X((0.65, 0.0, 0.095)), X_shake=_X((0.65, 0.0, 0.095)), X_end=_X((0.65, 0.0, 0.095))), 3),
+    (_snaps(shake=(), X_shake=_X((0.65, 0, 0.05)), end=ON_TABLE, X_end=X0), 4),  # dropped in the shake
+])
+def test_a_decided_failure_is_the_full_judges_verdict(snaps, stage):
+    """Stopped where the failure is decided, the verdict's flags, reason and detail are those of the whole run."""
+    full = judge(_spec(), *snaps)
+    at, early = _decided_at(_spec(), snaps)
+    assert at == stage and not full.grasp_success
+    assert (early.grasp_success, early.functional_success, early.failure_reason, early.detail) == (
+        full.grasp_success, full.functional_success, full.failure_reason, full.detail)
+    assert math.isnan(early.trigger_force_N)  # no press was simulated
+
+
+@pytest.mark.parametrize("snaps", [_snaps(), _snaps(end=(_index(P_TRIGGER_W - [0, 0.03, 0]), THUMB)),
+                                   _snaps(X_end=_X((0.65, 0.025, 0.12)))])
+def test_nothing_is_decided_before_the_press_when_the_grasp_holds(snaps):
+    """A functional grasp, a missed trigger and a slip on the press are all decided only at the end."""
+    assert _decided_at(_spec(), snaps) == (None, None)
