@@ -306,3 +306,43 @@ def test_low_rank_kernel_threads_and_storage_change_no_bit():
         kernels.KERNEL_STORE_ELEMENTS = stored_before
     for other in (threaded, recomputed):
         assert np.array_equal(other[0], ref[0]) and np.array_equal(other[1], ref[1]) and other[2] == ref[2]
+
+
+# ----------------------------------------------------------------------------- SQUAREM acceleration
+def test_squarem_solves_a_slow_linear_map_in_a_few_cycles():
+    """A contraction theta -> theta* + 0.95 (theta - theta*) (plain iteration: ~400 steps to 1e-9) with the
+    objective |theta - theta*|^2: squared extrapolation is exact on a linear map once its step bound
+    allows 1 / (1 - 0.95) = 20, so SQUAREM lands on theta* in a few cycles."""
+    from catgrasp_drake.core.em import squarem
+
+    target = np.array([0.3, -1.2, 2.0])
+
+    def em_map(theta):
+        return target + 0.95 * (theta - target), float(((theta - target) ** 2).sum()), False
+
+    r = squarem(em_map, np.zeros(3), n_points=1, max_evals=500, tol=1e-12)
+    assert r.stop == "tol" and r.evaluations < 20 and r.accepted >= 1
+    assert np.abs(r.theta - target).max() < 1e-6
+
+
+def test_squarem_cpd_reaches_the_plain_ems_fixed_point_in_fewer_steps():
+    rng = np.random.default_rng(0)
+    Y = rng.uniform([-0.03, -0.06, 0.0], [0.03, 0.06, 0.18], size=(500, 3))
+    X = _smooth_warp(Y, rng, beta=0.05, amp=0.01)
+    disp = np.sqrt(((X - Y) ** 2).sum(1).mean())
+    for low_rank in (None, "auto"):
+        plain = nonrigid_cpd(Y, X, beta=0.05, lam=1.0, max_iter=300, tol=1e-8, low_rank=low_rank)
+        seen = []
+        fast = nonrigid_cpd(Y, X, beta=0.05, lam=1.0, max_iter=300, tol=1e-8, low_rank=low_rank,
+                            acceleration="squarem", callback=lambda it: seen.append(it.iteration))
+        assert fast.converged and fast.iterations < 0.8 * plain.iterations, (fast.iterations, plain.iterations)
+        assert seen == list(range(1, len(seen) + 1)) and len(seen) >= fast.iterations - 1
+        assert np.abs(fast.transformed - plain.transformed).max() < 1e-3 * disp
+        assert np.sqrt(((fast.transformed - X) ** 2).sum(1).mean()) < 2e-3 * disp
+        assert np.allclose(Y + gaussian_kernel(Y, Y, 0.05) @ fast.W, fast.transformed, atol=1e-9)
+
+
+def test_bad_acceleration():
+    Y = blob((0.03, 0.06, 0.09, 0.0, 0.0), 50)
+    with pytest.raises(InputError, match="acceleration"):
+        nonrigid_cpd(Y, Y, acceleration="anderson")
