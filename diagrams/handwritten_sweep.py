@@ -5,6 +5,7 @@
                                          [--shift DX DY DZ] [--rotate RX RY RZ] [--model FILE]
                                          [--posture NAME.JOINT=RAD ...]
                                          [--objects DIR...] [--placements N] [--no-object-clearance]
+                                         [--mass-scale S]
 
 Each trial uses the category's default scenario (``<category>_default`` in
 ``models/station.scenarios.yaml``) with the object replaced by the instance,
@@ -32,6 +33,8 @@ import-object``, or the YCB scans prepared by ``python -m
 catgrasp_drake.data.ycb --out out/ycb``), each with its own category's
 grasp anchored on its own annotation; ``--placements N`` runs each object at
 N seeded random placements (``random_placement``, seeds 0..N-1);
+``--mass-scale S`` scales each object's mass and rotational inertia (``PlantSpec.object_mass_scale``;
+e.g. 3: a generated bottle about as heavy as a full real one).
 ``--no-object-clearance`` plans without the object clearance (the planner as
 it was before session 9), for a before/after in one command::
 
@@ -42,6 +45,7 @@ it was before session 9), for a before/after in one command::
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import sys
 from pathlib import Path
@@ -61,6 +65,8 @@ def sweep_task(spec: dict) -> dict:
     scenario = with_instance(load_scenario(f"{category}_default"), instance, category=category, model_dir=model_dir)
     if spec.get("seed") is not None:
         scenario = random_placement(scenario, spec["seed"])
+    if spec.get("mass_scale"):
+        scenario = scenario.replace(plant=dataclasses.replace(scenario.plant, object_mass_scale=spec["mass_scale"]))
     motion = learned_motion(spec["model"], category, instance) if spec.get("model") else \
         load_handwritten_motion(category, instance, annotations_dir=model_dir)
     if spec.get("postures"):
@@ -147,6 +153,8 @@ def main(argv=None) -> int:
                          "embedded instances; each in its own category")
     ap.add_argument("--placements", type=int, default=0, metavar="N",
                     help="N seeded random placements per object (seeds 0..N-1) instead of the scenario's pose")
+    ap.add_argument("--mass-scale", type=float, default=None, metavar="S",
+                    help="the object's mass (and rotational inertia) times S, e.g. 3: a full bottle")
     ap.add_argument("--no-object-clearance", action="store_true",
                     help="plan without the object clearance (PlanParams.object_penetration_tol=None)")
     args = ap.parse_args(argv)
@@ -166,6 +174,10 @@ def main(argv=None) -> int:
         variant |= {"model": str(args.model), "model_sha256": file_sha256(args.model)}
     if args.no_object_clearance:
         variant["no_object_clearance"] = True
+    if args.mass_scale is not None:
+        if not args.mass_scale > 0:
+            ap.error(f"--mass-scale: must be > 0, got {args.mass_scale}")
+        variant["mass_scale"] = args.mass_scale
     if args.objects:
         if args.model is not None:
             ap.error("--objects and --model: a model's learned grasps are for its own training instances")
