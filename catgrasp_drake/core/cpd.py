@@ -703,7 +703,9 @@ def _squarem_cpd(Xn, Yn, G, Q, lam_k, lam, e_of, m_step, start, s2, max_iter, to
         return MStep(Yn + Q @ LZ, 0.5 * lam * float((params * LZ).sum()), params)
 
     def em_map(theta):
-        params, sigma2 = theta[:-1].reshape(shape), math.exp(theta[-1])
+        if not np.isfinite(theta).all():  # an extrapolation gone wild: rejected by its objective
+            return theta, math.inf, False
+        params, sigma2 = theta[:-1].reshape(shape), math.exp(min(float(theta[-1]), 700.0))
         m = at(params)
         e = e_of(0, m, sigma2)
         last.update(e=e, m=m, sigma2=sigma2)
