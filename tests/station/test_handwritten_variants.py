@@ -1,10 +1,11 @@
 """``diagrams/handwritten_sweep.py --shift/--rotate`` (``station.handwritten.shifted_motion``): a variant of a
 hand-written grasp is a rigid motion of the whole grasp about the anchor region's centre (known answers, no
-simulation)."""
+simulation); ``--mass-scale`` makes the simulated object heavier (two trials)."""
 
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from scipy.spatial.transform import Rotation
 
 from catgrasp_drake.data.dataset import load_annotations
@@ -80,3 +81,19 @@ def test_the_sweep_reads_posture_overrides_from_the_command_line():
     for bad in ("closed.svh_pinky", "svh_pinky=0.8", "closed.svh_pinky=much"):
         with pytest.raises(ValueError, match="NAME.JOINT=RAD"):
             sweep.posture_overrides([bad], error)
+
+
+@pytest.mark.slow
+def test_the_sweeps_mass_scale_makes_the_object_heavier_in_the_simulation():
+    """``--mass-scale``: spray_bottle_00 (0.33 kg) is held by its hand-written grasp; 30 times heavier (9.9 kg, past
+    what the hand's effort-limited fingers can hold) it is not lifted."""
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "diagrams"))
+    from handwritten_sweep import sweep_task
+
+    spec = {"category": "spray_bottle", "instance": "spray_bottle_00"}
+    assert sweep_task(spec)["grasp"]
+    heavy = sweep_task(spec | {"mass_scale": 30.0})
+    assert not heavy["grasp"] and heavy["reason"] in ("not_lifted", "lifted_short", "slipped"), heavy
