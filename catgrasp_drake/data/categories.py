@@ -24,8 +24,14 @@ from catgrasp_drake.errors import InputError
 
 #: Densities (kg/m^3) used for mass and inertia of the solid meshes. Real tools
 #: are hollow shells; these effective densities give realistic masses
-#: (drill ~1.0-1.8 kg, spray bottle ~0.3-0.7 kg when partly filled, mug ~0.3 kg).
-DENSITY_KG_M3 = {"drill": 1300.0, "spray_bottle": 500.0, "mug": 1900.0}
+#: (drill ~1.0-1.8 kg, spray bottle ~0.2-1.0 kg from empty to full, mug ~0.3 kg). A generated
+#: spray bottle draws its own fill (SPRAY_FILL_DENSITY_KG_M3); the category's figure, the middle of
+#: that range, is what an imported bottle is given when its mass is not.
+DENSITY_KG_M3 = {"drill": 1300.0, "spray_bottle": 725.0, "mug": 1900.0}
+#: Spray bottles: the fraction drawn deep-bodied (Windex-like), and the range of the effective
+#: density of every bottle's solid (kg/m^3; empty to full of a water-like liquid).
+SPRAY_DEEP_FRACTION = 1.0 / 3.0
+SPRAY_FILL_DENSITY_KG_M3 = (350.0, 1100.0)
 #: How much each functional region's box is grown around the part itself (m): the annotated box is
 #: the part's bounding box plus this margin (read by the judge as the region's ``grown_by``).
 REGION_MARGIN_M = {"trigger": 0.004, "handle": 0.003}
@@ -41,6 +47,8 @@ class GeneratedInstance:
     mesh: trimesh.Trimesh
     regions: dict[str, dict[str, list[float]]]
     params: dict[str, float] = field(default_factory=dict)
+    #: Effective density of the solid (kg/m^3); None: the category's DENSITY_KG_M3.
+    density_kg_m3: float | None = None
 
 
 def _box_region(lo, hi, margin: float = 0.0) -> dict[str, list[float]]:
@@ -127,7 +135,14 @@ def build_drill(p: dict[str, float]) -> GeneratedInstance:
 
 # ----------------------------------------------------------------------- spray bottle
 def spray_bottle_params(rng: np.random.Generator) -> dict[str, float]:
-    return {
+    """Proportions of a spray bottle: a flat body (the paper's CAD bottles) or, one in three, a deep
+    one whose shoulder tapers over 7-11 cm into a thin neck behind the body's middle (the YCB
+    Windex bottle's shape), filled to 350-1100 kg/m^3 (a full 1 L bottle weighs 1.0 kg).
+
+    The draws that extend the first family (style, deep proportions, fill) come after its own, so
+    a flat bottle's proportions are those the generator drew before the extension.
+    """
+    p = {
         "body_width": _u(rng, 0.065, 0.105),
         "body_depth": _u(rng, 0.040, 0.068),
         "body_height": _u(rng, 0.12, 0.21),
@@ -145,19 +160,36 @@ def spray_bottle_params(rng: np.random.Generator) -> dict[str, float]:
         "trigger_width": _u(rng, 0.012, 0.018),
         "trigger_thickness": _u(rng, 0.006, 0.010),
         "trigger_gap": _u(rng, 0.010, 0.018),
+        "neck_offset_y": 0.0,
     }
+    deep = rng.uniform() < SPRAY_DEEP_FRACTION
+    deep_proportions = {
+        "body_width": _u(rng, 0.072, 0.09),
+        "body_depth": _u(rng, 0.072, 0.095),
+        "body_height": _u(rng, 0.165, 0.2),
+        "shoulder_height": _u(rng, 0.07, 0.11),
+        "neck_radius": _u(rng, 0.010, 0.0125),
+        "neck_height": _u(rng, 0.022, 0.035),  # the trigger hangs clear of the sloping shoulder
+        "neck_offset_y": _u(rng, -0.02, -0.005),
+    }
+    if deep:
+        p.update(deep_proportions)
+    p["deep"] = float(deep)
+    p["density_kg_m3"] = _u(rng, *SPRAY_FILL_DENSITY_KG_M3)
+    return p
 
 
 def build_spray_bottle(p: dict[str, float]) -> GeneratedInstance:
     w, d, h = p["body_width"], p["body_depth"], p["body_height"]
     sh = p["shoulder_height"]
     nr = p["neck_radius"]
+    oy = p.get("neck_offset_y", 0.0)  # the neck, head and trigger sit this far along y from the body's axis
     # body: hull of elliptic sections (bottom, waist, top of wall, shoulder into the neck)
     body = Manifold.batch_hull([
         shapes.elliptic_slab((0.0, 0.0, 0.003), w / 2 * 0.96, d / 2 * 0.96, 0.006),
         shapes.elliptic_slab((0.0, 0.0, 0.012), w / 2, d / 2, 0.006),
         shapes.elliptic_slab((0.0, 0.0, h - sh), w / 2, d / 2, 0.004),
-        shapes.elliptic_slab((0.0, 0.0, h), nr * 1.25, nr * 1.25, 0.004),
+        shapes.elliptic_slab((0.0, oy, h), nr * 1.25, nr * 1.25, 0.004),
     ])
     if p["waist"] < 0.99:  # a grip waist: cut the sides with two large ellipsoids
         cut_r = w * 0.5
@@ -166,10 +198,10 @@ def build_spray_bottle(p: dict[str, float]) -> GeneratedInstance:
             body = body - shapes.ellipsoid(
                 (sx * (w / 2 + cut_r - inset), 0.0, 0.45 * h), (cut_r, d, 0.28 * h))
     neck_top = h + p["neck_height"]
-    neck = Manifold.cylinder(p["neck_height"] + 0.004, nr, nr, shapes.SEGMENTS).translate((0, 0, h - 0.002))
+    neck = Manifold.cylinder(p["neck_height"] + 0.004, nr, nr, shapes.SEGMENTS).translate((0, oy, h - 0.002))
     # trigger head: a rounded block from behind the neck forward, sloping nose
     hl, hh, hw = p["head_length"], p["head_height"], p["head_width"]
-    y0, y1 = -p["head_back"], -p["head_back"] + hl
+    y0, y1 = oy - p["head_back"], oy - p["head_back"] + hl
     z0, z1 = neck_top, neck_top + hh
     head = Manifold.batch_hull([
         shapes.rounded_box(((0.0), (y0 + y1) / 2 - 0.005, (z0 + z1) / 2), (hw, hl - 0.01, hh), 0.006),
@@ -179,7 +211,7 @@ def build_spray_bottle(p: dict[str, float]) -> GeneratedInstance:
     nozzle = shapes.cylinder_y(y1 - 0.003, y1 + p["nozzle_length"], p["nozzle_radius"],
                                p["nozzle_radius"] * 0.85, 0.0, nz, shapes.SMALL_SEGMENTS)
     # trigger: a lever hanging from the head's underside in front of the neck, tilted forward
-    ty = nr + p["trigger_gap"] + p["trigger_thickness"] / 2
+    ty = oy + nr + p["trigger_gap"] + p["trigger_thickness"] / 2
     ty = min(ty, y1 - 0.012)
     tl = p["trigger_length"]
     top = np.array([0.0, ty, z0 + 0.004])
@@ -198,7 +230,8 @@ def build_spray_bottle(p: dict[str, float]) -> GeneratedInstance:
     lo[2] += shift
     hi[2] += shift
     regions = {"trigger": _box_region(lo, hi, margin=REGION_MARGIN_M["trigger"])}
-    return GeneratedInstance("spray_bottle", shapes.to_trimesh(solid), regions, p)
+    return GeneratedInstance("spray_bottle", shapes.to_trimesh(solid), regions, p,
+                             density_kg_m3=p.get("density_kg_m3"))
 
 
 # ------------------------------------------------------------------------------- mug

@@ -228,7 +228,7 @@ def write_instance(gen: GeneratedInstance, name: str, directory: Path, seed: lis
     """Write mesh, SDF and annotations of one generated instance into ``directory``."""
     if not gen.mesh.is_watertight:
         raise ModelFileError(f"{name}: generated mesh is not watertight")
-    density = DENSITY_KG_M3[gen.category]
+    density = gen.density_kg_m3 if gen.density_kg_m3 is not None else DENSITY_KG_M3[gen.category]
     # mass properties of the mesh at the written precision, so they match the file
     solid = trimesh.Trimesh(vertices=np.round(gen.mesh.vertices, 6), faces=gen.mesh.faces, process=False)
     solid.density = density

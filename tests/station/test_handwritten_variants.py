@@ -85,7 +85,7 @@ def test_the_sweep_reads_posture_overrides_from_the_command_line():
 
 @pytest.mark.slow
 def test_the_sweeps_mass_scale_makes_the_object_heavier_in_the_simulation():
-    """``--mass-scale``: spray_bottle_00 (0.33 kg) is held by its hand-written grasp; 30 times heavier (9.9 kg, past
+    """``--mass-scale``: spray_bottle_00 (0.69 kg) is held by its hand-written grasp; 30 times heavier (21 kg, past
     what the hand's effort-limited fingers can hold) it is not lifted."""
     import sys
     from pathlib import Path
