@@ -73,6 +73,32 @@ def test_trigger_is_in_front_of_the_handle_under_the_body():
         assert 0.35 * top < trig[2] < 0.9 * top  # under the motor body, above the battery
 
 
+def test_deep_spray_bottles_are_drawn_with_thin_necks_free_triggers_and_their_own_fill():
+    """One spray bottle in three is deep-bodied (the YCB Windex bottle's shape): body 7.2-9.5 cm along the
+    nozzle (the flat ones 4.0-6.8 cm), a 2.0-2.5 cm neck behind the body's middle, and its trigger lever
+    hanging clear of the sloping shoulder: a horizontal cut 3 mm above the lever's bottom meets two
+    separate solids (body and lever). Every bottle draws its fill, so masses reach a full bottle's 1 kg."""
+    from catgrasp_drake.data.categories import SPRAY_FILL_DENSITY_KG_M3, build_spray_bottle, spray_bottle_params
+
+    draws = [spray_bottle_params(np.random.default_rng([99, i])) for i in range(90)]
+    deep = [p for p in draws if p["deep"]]
+    assert 20 <= len(deep) <= 40  # 1/3 of 90 = 30
+    assert all(p["body_depth"] >= 0.072 and 0.010 <= p["neck_radius"] <= 0.0125 and p["neck_offset_y"] < 0
+               for p in deep)
+    assert all(p["body_depth"] <= 0.068 and p["neck_offset_y"] == 0.0 for p in draws if not p["deep"])
+    lo, hi = SPRAY_FILL_DENSITY_KG_M3
+    assert all(lo <= p["density_kg_m3"] <= hi for p in draws)
+    for p in deep[:8]:
+        bottle = build_spray_bottle(p)
+        assert bottle.mesh.is_watertight and bottle.density_kg_m3 == p["density_kg_m3"]
+        region = bottle.regions["trigger"]
+        z = region["center"][2] - region["half_extents"][2] + 0.004 + 0.003  # the box holds a 4 mm margin
+        cut = bottle.mesh.section(plane_origin=[0.0, 0.0, z], plane_normal=[0.0, 0.0, 1.0])
+        assert len(cut.discrete) == 2, "the trigger lever must hang free of the shoulder"
+    masses = [load_annotations("spray_bottle", n)["mass_kg"] for n in list_instances("spray_bottle")]
+    assert max(masses) > 0.9 and min(masses) < 0.3
+
+
 def test_variation_is_more_than_a_global_scale():
     ext = np.array([load_mesh("drill", n).extents for n in list_instances("drill")])
     ratios = ext[:, 2] / ext[:, 1]  # height / length
