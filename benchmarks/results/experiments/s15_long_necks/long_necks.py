@@ -38,10 +38,20 @@ LONG_NECK_M = (0.035, 0.055)
 DEEP_NECK_M = (0.022, 0.035)  # the committed generator's deep-bottle neck range
 
 
-def variant_bottle(seed, *, long_neck: bool, centred_neck: bool):
+def _mapped(value, old, new):
+    """``value`` drawn uniformly in ``old`` mapped onto the range ``new`` (the same draw)."""
+    return round(new[0] + (value - old[0]) / (old[1] - old[0]) * (new[1] - new[0]), 5)
+
+
+def variant_bottle(seed, *, long_neck: bool, centred_neck: bool, windex_head: bool = False):
     """The committed generator's bottle of ``seed``; if deep, its neck redrawn 3.5-5.5 cm long (the same draw
-    mapped onto the longer range) and/or set on the body's axis (the Windex bottle's neck is within 3 mm of it)."""
+    mapped onto the longer range) and/or set on the body's axis (the Windex bottle's neck is within 3 mm of it),
+    and/or its head made like the Windex bottle's: 2.2-2.8 cm tall, reaching 3.5-4.5 cm behind the neck."""
     p = categories.spray_bottle_params(np.random.default_rng(seed))
+    if p["deep"] and windex_head:
+        p["head_height"] = _mapped(p["head_height"], (0.028, 0.045), (0.022, 0.028))
+        p["head_back"] = _mapped(p["head_back"], (0.012, 0.025), (0.035, 0.045))
+        p["head_length"] = _mapped(p["head_length"], (0.055, 0.085), (0.08, 0.095))
     if p["deep"] and long_neck:
         u = (p["neck_height"] - DEEP_NECK_M[0]) / (DEEP_NECK_M[1] - DEEP_NECK_M[0])
         p["neck_height"] = round(LONG_NECK_M[0] + u * (LONG_NECK_M[1] - LONG_NECK_M[0]), 5)
@@ -50,10 +60,12 @@ def variant_bottle(seed, *, long_neck: bool, centred_neck: bool):
     return categories.build_spray_bottle(p)
 
 
-VARIANTS = {  # label: (long_neck, centred_neck)
-    "long necks": (True, False),
-    "centred necks": (False, True),
-    "long, centred necks": (True, True),
+VARIANTS = {  # label: (long_neck, centred_neck, windex_head)
+    "long necks": (True, False, False),
+    "centred necks": (False, True, False),
+    "long, centred necks": (True, True, False),
+    "Windex-like heads, centred necks": (False, True, True),
+    "Windex-like heads, long centred necks": (True, True, True),
 }
 
 
@@ -82,9 +94,9 @@ def main(argv=None) -> int:
     runs = {"committed bottles": (build_shape_space(
         [full_cloud(load_mesh("spray_bottle", n), voxel=voxel) for n in names], canonical_index=c_index,
         **shape_kwargs), committed_objs)}
-    for label, (long_neck, centred) in VARIANTS.items():
+    for label, (long_neck, centred, head) in VARIANTS.items():
         bottles = [variant_bottle(instance_seed("spray_bottle", int(n.split("_")[-1])), long_neck=long_neck,
-                                  centred_neck=centred) for n in names]
+                                  centred_neck=centred, windex_head=head) for n in names]
         space = build_shape_space([full_cloud(b.mesh, voxel=voxel) for b in bottles], canonical_index=c_index,
                                   **shape_kwargs)
         runs[label] = (space, [(full_cloud(b.mesh, voxel=CLOUD_VOXEL), b.regions["trigger"]["center"])
