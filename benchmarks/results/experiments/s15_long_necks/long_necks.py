@@ -3,13 +3,15 @@
     python benchmarks/results/experiments/s15_long_necks/long_necks.py [--ycb out/ycb]
 
 The committed spray model's grasp lands 31.5 mm from the YCB Windex bottle's trigger (full view,
-``bench_family_coverage.py``): its neck is 5 cm long, the deep generated bottles' 2.2-3.5 cm. This
-scratch experiment redraws the deep bottles' necks 3.5-5.5 cm long (the same draw mapped onto the
-longer range; every other parameter and every flat bottle unchanged), rebuilds the shape space of the 15
-training bottles with the training's own settings, and measures where the transferred grasp's functional
-point lands against the annotated trigger -- for the committed space and the long-neck one, both with the
-canonical grasp as the regressor's output (so only the shape space differs; the committed model's learned
-mean is within 3 mm of it). Nothing here is committed data; the Windex bottle is measured, not tuned on.
+``bench_family_coverage.py``): its neck is 5 cm long, the deep generated bottles' 2.2-3.5 cm, and its head
+is short and reaches far behind the neck. This scratch experiment changes only the deep training bottles
+(:data:`VARIANTS`: necks 3.5-5.5 cm long, necks on the body's axis, Windex-like heads; each the same draw
+mapped onto the new range, every other parameter and every flat bottle unchanged), rebuilds the shape space
+of the 15 training bottles with the training's own settings, and measures where the transferred grasp's
+functional point lands against the annotated trigger -- for the committed bottles and each variant, all
+with the canonical grasp as the regressor's output (so only the shape space differs; the committed model's
+learned mean is within 3 mm of it). Nothing here is committed data; the Windex bottle is measured, not
+tuned on.
 """
 
 from __future__ import annotations
@@ -53,8 +55,7 @@ def variant_bottle(seed, *, long_neck: bool, centred_neck: bool, windex_head: bo
         p["head_back"] = _mapped(p["head_back"], (0.012, 0.025), (0.035, 0.045))
         p["head_length"] = _mapped(p["head_length"], (0.055, 0.085), (0.08, 0.095))
     if p["deep"] and long_neck:
-        u = (p["neck_height"] - DEEP_NECK_M[0]) / (DEEP_NECK_M[1] - DEEP_NECK_M[0])
-        p["neck_height"] = round(LONG_NECK_M[0] + u * (LONG_NECK_M[1] - LONG_NECK_M[0]), 5)
+        p["neck_height"] = _mapped(p["neck_height"], DEEP_NECK_M, LONG_NECK_M)
     if p["deep"] and centred_neck:
         p["neck_offset_y"] = 0.0
     return categories.build_spray_bottle(p)
