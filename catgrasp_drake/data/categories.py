@@ -30,7 +30,7 @@ from catgrasp_drake.errors import InputError
 DENSITY_KG_M3 = {"drill": 1300.0, "spray_bottle": 725.0, "mug": 1900.0}
 #: Spray bottles: the fraction drawn deep-bodied (Windex-like), and the range of the effective
 #: density of every bottle's solid (kg/m^3; empty to full of a water-like liquid).
-SPRAY_DEEP_FRACTION = 1.0 / 3.0
+SPRAY_DEEP_FRACTION = 0.5
 SPRAY_FILL_DENSITY_KG_M3 = (350.0, 1100.0)
 #: How much each functional region's box is grown around the part itself (m): the annotated box is
 #: the part's bounding box plus this margin (read by the judge as the region's ``grown_by``).
@@ -134,13 +134,24 @@ def build_drill(p: dict[str, float]) -> GeneratedInstance:
 
 
 # ----------------------------------------------------------------------- spray bottle
+#: The flat bottles' head and trigger ranges (m); a deep bottle maps its draws onto its own.
+_SPRAY_HEAD_LENGTH = (0.055, 0.085)
+_SPRAY_HEAD_HEIGHT = (0.028, 0.045)
+_SPRAY_HEAD_BACK = (0.012, 0.025)
+_SPRAY_TRIGGER_LENGTH = (0.030, 0.048)
+_SPRAY_TRIGGER_GAP = (0.010, 0.018)  # between the neck and the trigger lever
+
+
 def spray_bottle_params(rng: np.random.Generator) -> dict[str, float]:
-    """Proportions of a spray bottle: a flat body (the paper's CAD bottles) or, one in three, a deep
-    one whose shoulder tapers over 7-11 cm into a thin neck behind the body's middle (the YCB
-    Windex bottle's shape), filled to 350-1100 kg/m^3 (a full 1 L bottle weighs 1.0 kg).
+    """Proportions of a spray bottle: a flat body (the paper's CAD bottles) or, one in two, a deep
+    one like the YCB Windex bottle: the shoulder tapers over 7-11 cm into a thin neck 3.5-5.5 cm long
+    near the body's axis, under a low head (2.2-3.0 cm) that reaches 3.0-4.5 cm behind the neck and
+    5-6 cm ahead of it, with a 2.5-3.6 cm trigger 1.4-2.2 cm in front of the neck. Every bottle is
+    filled to 350-1100 kg/m^3 (a full 1 L bottle weighs 1.0 kg).
 
     The draws that extend the first family (style, deep proportions, fill) come after its own, so
-    a flat bottle's proportions are those the generator drew before the extension.
+    a flat bottle's proportions are those the generator drew before the extension; a deep bottle's
+    head and trigger are its own draws mapped onto the deep ranges (:func:`_remap`).
     """
     p = {
         "body_width": _u(rng, 0.065, 0.105),
@@ -150,16 +161,16 @@ def spray_bottle_params(rng: np.random.Generator) -> dict[str, float]:
         "waist": _u(rng, 0.82, 1.0),
         "neck_radius": _u(rng, 0.012, 0.017),
         "neck_height": _u(rng, 0.012, 0.03),
-        "head_length": _u(rng, 0.055, 0.085),
-        "head_height": _u(rng, 0.028, 0.045),
+        "head_length": _u(rng, *_SPRAY_HEAD_LENGTH),
+        "head_height": _u(rng, *_SPRAY_HEAD_HEIGHT),
         "head_width": _u(rng, 0.026, 0.036),
-        "head_back": _u(rng, 0.012, 0.025),
+        "head_back": _u(rng, *_SPRAY_HEAD_BACK),
         "nozzle_radius": _u(rng, 0.004, 0.007),
         "nozzle_length": _u(rng, 0.006, 0.014),
-        "trigger_length": _u(rng, 0.030, 0.048),
+        "trigger_length": _u(rng, *_SPRAY_TRIGGER_LENGTH),
         "trigger_width": _u(rng, 0.012, 0.018),
         "trigger_thickness": _u(rng, 0.006, 0.010),
-        "trigger_gap": _u(rng, 0.010, 0.018),
+        "trigger_gap": _u(rng, *_SPRAY_TRIGGER_GAP),
         "neck_offset_y": 0.0,
     }
     deep = rng.uniform() < SPRAY_DEEP_FRACTION
@@ -169,14 +180,25 @@ def spray_bottle_params(rng: np.random.Generator) -> dict[str, float]:
         "body_height": _u(rng, 0.165, 0.2),
         "shoulder_height": _u(rng, 0.07, 0.11),
         "neck_radius": _u(rng, 0.010, 0.0125),
-        "neck_height": _u(rng, 0.022, 0.035),  # the trigger hangs clear of the sloping shoulder
-        "neck_offset_y": _u(rng, -0.02, -0.005),
+        "neck_height": _u(rng, 0.035, 0.055),  # the trigger hangs along the neck's upper part
+        "neck_offset_y": _u(rng, -0.008, 0.0),
     }
     if deep:
         p.update(deep_proportions)
+        p["head_height"] = _remap(p["head_height"], _SPRAY_HEAD_HEIGHT, (0.022, 0.030))
+        p["head_back"] = _remap(p["head_back"], _SPRAY_HEAD_BACK, (0.030, 0.045))
+        head_front = _remap(p["head_length"], _SPRAY_HEAD_LENGTH, (0.050, 0.060))  # ahead of the neck's axis
+        p["head_length"] = round(p["head_back"] + head_front, 5)
+        p["trigger_length"] = _remap(p["trigger_length"], _SPRAY_TRIGGER_LENGTH, (0.025, 0.036))
+        p["trigger_gap"] = _remap(p["trigger_gap"], _SPRAY_TRIGGER_GAP, (0.014, 0.022))
     p["deep"] = float(deep)
     p["density_kg_m3"] = _u(rng, *SPRAY_FILL_DENSITY_KG_M3)
     return p
+
+
+def _remap(value: float, drawn_in: tuple[float, float], onto: tuple[float, float]) -> float:
+    """``value``, drawn uniformly in ``drawn_in``, mapped linearly onto ``onto`` (the same draw, another range)."""
+    return round(onto[0] + (value - drawn_in[0]) / (drawn_in[1] - drawn_in[0]) * (onto[1] - onto[0]), 5)
 
 
 def build_spray_bottle(p: dict[str, float]) -> GeneratedInstance:
