@@ -145,9 +145,10 @@ _SPRAY_TRIGGER_GAP = (0.010, 0.018)  # between the neck and the trigger lever
 def spray_bottle_params(rng: np.random.Generator) -> dict[str, float]:
     """Proportions of a spray bottle: a flat body (the paper's CAD bottles) or, one in two, a deep
     one like the YCB Windex bottle: the shoulder tapers over 7-11 cm into a thin neck 3.5-5.5 cm long
-    near the body's axis, under a low head (2.2-3.0 cm) that reaches 3.0-4.5 cm behind the neck and
-    5-6 cm ahead of it, with a 2.5-3.6 cm trigger 1.4-2.2 cm in front of the neck. Every bottle is
-    filled to 350-1100 kg/m^3 (a full 1 L bottle weighs 1.0 kg).
+    near the body's axis whose top 1.8-3.0 cm is the sprayer's screw cap (2.8-3.4 cm across), under a
+    low head (2.2-3.0 cm) that reaches 3.0-4.5 cm behind the neck and 5.2-6.2 cm ahead of it, with a
+    2.5-3.6 cm trigger 1.2-2.0 cm in front of the cap. Every bottle is filled to 350-1100 kg/m^3 (a full
+    1 L bottle weighs 1.0 kg).
 
     The draws that extend the first family (style, deep proportions, fill) come after its own, so
     a flat bottle's proportions are those the generator drew before the extension; a deep bottle's
@@ -187,12 +188,15 @@ def spray_bottle_params(rng: np.random.Generator) -> dict[str, float]:
         p.update(deep_proportions)
         p["head_height"] = _remap(p["head_height"], _SPRAY_HEAD_HEIGHT, (0.022, 0.030))
         p["head_back"] = _remap(p["head_back"], _SPRAY_HEAD_BACK, (0.030, 0.045))
-        head_front = _remap(p["head_length"], _SPRAY_HEAD_LENGTH, (0.050, 0.060))  # ahead of the neck's axis
+        head_front = _remap(p["head_length"], _SPRAY_HEAD_LENGTH, (0.052, 0.062))  # ahead of the neck's axis
         p["head_length"] = round(p["head_back"] + head_front, 5)
         p["trigger_length"] = _remap(p["trigger_length"], _SPRAY_TRIGGER_LENGTH, (0.025, 0.036))
-        p["trigger_gap"] = _remap(p["trigger_gap"], _SPRAY_TRIGGER_GAP, (0.014, 0.022))
+        p["trigger_gap"] = _remap(p["trigger_gap"], _SPRAY_TRIGGER_GAP, (0.012, 0.020))
     p["deep"] = float(deep)
     p["density_kg_m3"] = _u(rng, *SPRAY_FILL_DENSITY_KG_M3)
+    cap = {"cap_radius": _u(rng, 0.014, 0.017), "cap_height": _u(rng, 0.018, 0.030)}
+    if deep:  # the sprayer's screw cap (a 28-32 mm closure) at the top of the thin neck, under the head
+        p.update(cap)
     return p
 
 
@@ -221,6 +225,11 @@ def build_spray_bottle(p: dict[str, float]) -> GeneratedInstance:
                 (sx * (w / 2 + cut_r - inset), 0.0, 0.45 * h), (cut_r, d, 0.28 * h))
     neck_top = h + p["neck_height"]
     neck = Manifold.cylinder(p["neck_height"] + 0.004, nr, nr, shapes.SEGMENTS).translate((0, oy, h - 0.002))
+    cap_r = p.get("cap_radius", 0.0)
+    if cap_r > 0.0:
+        cap_h = min(p["cap_height"], p["neck_height"])
+        neck = neck + Manifold.cylinder(cap_h + 0.002, cap_r, cap_r, shapes.SEGMENTS).translate(
+            (0, oy, neck_top - cap_h))
     # trigger head: a rounded block from behind the neck forward, sloping nose
     hl, hh, hw = p["head_length"], p["head_height"], p["head_width"]
     y0, y1 = oy - p["head_back"], oy - p["head_back"] + hl
@@ -233,7 +242,7 @@ def build_spray_bottle(p: dict[str, float]) -> GeneratedInstance:
     nozzle = shapes.cylinder_y(y1 - 0.003, y1 + p["nozzle_length"], p["nozzle_radius"],
                                p["nozzle_radius"] * 0.85, 0.0, nz, shapes.SMALL_SEGMENTS)
     # trigger: a lever hanging from the head's underside in front of the neck, tilted forward
-    ty = oy + nr + p["trigger_gap"] + p["trigger_thickness"] / 2
+    ty = oy + max(nr, cap_r) + p["trigger_gap"] + p["trigger_thickness"] / 2
     ty = min(ty, y1 - 0.012)
     tl = p["trigger_length"]
     top = np.array([0.0, ty, z0 + 0.004])

@@ -75,7 +75,8 @@ def test_trigger_is_in_front_of_the_handle_under_the_body():
 
 def test_deep_spray_bottles_are_drawn_with_thin_necks_free_triggers_and_their_own_fill():
     """One spray bottle in two is deep-bodied like the YCB Windex bottle: body 7.2-9.5 cm along the nozzle
-    (the flat ones 4.0-6.8 cm), a 2.0-2.5 cm neck 3.5-5.5 cm long within 8 mm of the body's axis, a low
+    (the flat ones 4.0-6.8 cm), a 2.0-2.5 cm neck 3.5-5.5 cm long within 8 mm of the body's axis under a
+    2.8-3.4 cm screw cap, a low
     head (2.2-3.0 cm) reaching 3.0-4.5 cm behind the neck, and its 2.5-3.6 cm trigger lever hanging clear
     of the sloping shoulder: a horizontal cut 3 mm above the lever's bottom meets two separate solids
     (body and lever). Every bottle draws its fill, so masses reach a full bottle's 1 kg."""
@@ -87,9 +88,9 @@ def test_deep_spray_bottles_are_drawn_with_thin_necks_free_triggers_and_their_ow
     assert all(p["body_depth"] >= 0.072 and 0.010 <= p["neck_radius"] <= 0.0125
                and 0.035 <= p["neck_height"] <= 0.055 and -0.008 <= p["neck_offset_y"] <= 0.0
                and 0.022 <= p["head_height"] <= 0.030 and 0.030 <= p["head_back"] <= 0.045
-               and 0.025 <= p["trigger_length"] <= 0.036 for p in deep)
+               and 0.025 <= p["trigger_length"] <= 0.036 and 0.014 <= p["cap_radius"] <= 0.017 for p in deep)
     assert all(p["body_depth"] <= 0.068 and p["neck_offset_y"] == 0.0 and p["head_back"] <= 0.025
-               for p in draws if not p["deep"])
+               and "cap_radius" not in p for p in draws if not p["deep"])
     lo, hi = SPRAY_FILL_DENSITY_KG_M3
     assert all(lo <= p["density_kg_m3"] <= hi for p in draws)
     for p in deep[:8]:
