@@ -172,7 +172,7 @@ def _cmd_train(args) -> int:
     _check_instances(args.category, args.instances)
     if args.instances and len(args.instances) < 2:
         raise InputError(f"--instances: training needs at least 2 instances, got {len(args.instances)}")
-    if args.canonical is not None:
+    if args.canonical not in (None, "region"):
         _check_instances(args.category, [args.canonical], "--canonical")
         if args.instances and args.canonical not in args.instances:
             raise InputError(f"--canonical: {args.canonical!r} is not among --instances")
@@ -202,7 +202,7 @@ def _cmd_train(args) -> int:
             raise InputError(f"--hold-out: expected 0..{len(names) - 2} for {len(names)} instances, "
                              f"got {args.hold_out}")
         instances = names[:len(names) - args.hold_out]
-        if args.canonical is not None and args.canonical not in instances:
+        if args.canonical not in (None, "region") and args.canonical not in instances:
             raise InputError(f"--canonical: {args.canonical!r} is held out; lower --hold-out or pick another")
         if args.hold_out:
             print(f"held out (never trained on; the demo's novel instances): {', '.join(names[len(instances):])}")
@@ -244,6 +244,10 @@ def _print_training(model) -> None:
     for name, s in st["per_instance"].items():
         print(f"{name:<18s} {s['sampled']:7d} {s['rejected_constraint']:7d} {s['rejected_plan']:5d} "
               f"{s['simulated']:4d} {s['grasped']:5d} {s['functional']:5d}")
+    if "canonical_choice" in st:
+        errs = st["canonical_choice"]["errors_mm"]
+        print(f"canonical instance: {model.canonical_instance}, by {st['canonical_choice']['by']}: "
+              + ", ".join(f"{n} {e:.1f}" for n, e in sorted(errs.items(), key=lambda kv: kv[1])))
     rate = st["trials_functional"] / max(st["trials_simulated"], 1)
     print(f"simulated trials: {st['trials_simulated']}, functional successes: {st['trials_functional']} "
           f"({100 * rate:.0f} %), instances with a functional success: "
@@ -619,7 +623,8 @@ def build_parser() -> argparse.ArgumentParser:
     t.add_argument("--instances", nargs="+", help="training instances (default: all embedded ones but --hold-out)")
     t.add_argument("--hold-out", type=_int_at_least(0), default=2,
                    help="leave the category's last N instances out of training (default 2: the demo's novel ones)")
-    t.add_argument("--canonical", help="canonical instance (default: the first training instance)")
+    t.add_argument("--canonical", help="canonical instance (default: the first training instance); 'region': the "
+                   "instance whose trigger/handle the CPD fields carry best onto the others (one shape space each)")
     t.add_argument("--objects", nargs="+", metavar="DIR", default=(),
                    help="imported objects (catgrasp import-object) of the category to train on as well; or ONE "
                         "category folder (meshes + category.yaml, docs/import.md): a new category, trained on its "

@@ -53,7 +53,7 @@ from typing import Callable
 import numpy as np
 
 from catgrasp_drake.category_model import CategoryModel
-from catgrasp_drake.core.deformation import inverse_warp_poses, warp_poses
+from catgrasp_drake.core.deformation import deform_points, inverse_warp_poses, warp_poses
 from catgrasp_drake.core.regression import (
     REGRESSOR_GRID,
     SIMPLICITY,
@@ -120,7 +120,9 @@ class TrainingConfig:
     samples_per_instance: int = 12
     sampling: SamplingParams = SamplingParams()
     seed: int = 0
-    canonical_instance: str | None = None  # None: the first instance
+    # None: the first instance; "region": the one whose functional region the CPD fields carry best onto
+    # the others (choose_canonical_by_region)
+    canonical_instance: str | None = None
     cloud_voxel: float = 0.01
     # CPD kernel width (m). 0.10, not the core's 0.02: a smooth field keeps correspondences coherent
     # where grasps need them -- the canonical trigger/handle warped onto each training instance lands
@@ -508,6 +510,39 @@ def refit_regressor(model: CategoryModel, config: TrainingConfig = TrainingConfi
     return dataclasses.replace(model, regressor=regressor, stats=stats, params=params)
 
 
+def _region_centre(annotations: dict, region: str, name: str) -> np.ndarray:
+    regions = annotations.get("regions", {})
+    if region not in regions:
+        raise InputError(f"{name}: no {region!r} region annotated; choosing the canonical instance by "
+                         "region needs it on every training instance")
+    return np.asarray(regions[region]["center"], float)
+
+
+def choose_canonical_by_region(clouds, region_centres, shape_kwargs: dict, progress=None):
+    """The canonical instance that carries the functional region best: for each candidate k, the shape
+    space with k as canonical; k's annotated region centre warped by each instance's CPD field
+    (``deform_points``) against that instance's own centre (object frame, m). Returns (index of the
+    lowest mean error, the mean error of every candidate (m), the chosen candidate's space).
+
+    A grasp is anchored at the region, so this is the error with which the canonical grasp starts on every
+    training instance (a flat spray bottle as canonical: 7.6 mm mean, 22.5 mm on the deep ones; a deep
+    one: 2.2-2.8 mm, training.md). It costs one shape space per instance (K * (K - 1) registrations).
+    """
+    centres = np.asarray(region_centres, float)
+    K = len(clouds)
+    errors, best = np.zeros(K), None
+    for k in range(K):
+        space = build_shape_space(clouds, canonical_index=k, **shape_kwargs)
+        warped = np.array([deform_points(space.canonical, space.W_train[i], space.beta, centres[k:k + 1])[0]
+                           for i in range(K)])
+        errors[k] = np.mean(np.linalg.norm(warped - centres, axis=1)[np.arange(K) != k])
+        if best is None or errors[k] < errors[best[0]]:
+            best = (k, space)
+        if progress is not None:
+            progress(k + 1, K)
+    return best[0], errors, best[1]
+
+
 def train_category(
     category: str,
     instances: list[str] | None = None,
@@ -538,20 +573,29 @@ def train_category(
     if len(instances) < 2:
         raise InputError(f"training needs at least 2 instances, got {len(instances)}")
     canonical = config.canonical_instance or instances[0]
-    if canonical not in instances:
+    if canonical not in instances and canonical != "region":
         raise InputError(f"canonical instance {canonical!r} is not among the training instances")
-    c_index = instances.index(canonical)
 
     clouds = [full_cloud(read_mesh(Path(object_dirs[n]) / f"{n}.obj"), voxel=config.cloud_voxel) if n in object_dirs
               else instance_clouds(category, [n], config.cloud_voxel)[0] for n in instances]
-    space = build_shape_space(clouds, canonical_index=c_index, progress=(
-        (lambda d, t: progress("shape", d, t)) if progress else None), **config.shape_kwargs())
+    annotations = {n: read_annotations(Path(object_dirs[n]) / "annotations.json") if n in object_dirs
+                   else load_annotations(category, n) for n in instances}
+    canonical_choice = None
+    if canonical == "region":
+        region = load_constraint(category).region
+        c_index, errors, space = choose_canonical_by_region(
+            clouds, [_region_centre(annotations[n], region, n) for n in instances], config.shape_kwargs(),
+            progress=(lambda d, t: progress("canonical", d, t)) if progress else None)
+        canonical = instances[c_index]
+        canonical_choice = {"by": f"mean {region} warp error (mm)",
+                            "errors_mm": {n: round(1000 * e, 2) for n, e in zip(instances, errors)}}
+    else:
+        space = build_shape_space(clouds, canonical_index=instances.index(canonical), progress=(
+            (lambda d, t: progress("shape", d, t)) if progress else None), **config.shape_kwargs())
     t_shape = time.perf_counter() - t0
 
     template = load_handwritten_motion(category, canonical, config.grasp_file,
                                        annotations_dir=object_dirs.get(canonical))
-    annotations = {n: read_annotations(Path(object_dirs[n]) / "annotations.json") if n in object_dirs
-                   else load_annotations(category, n) for n in instances}
     tip_H = functional_point_in_hand(template, annotations[canonical], load_constraint(category).region)
     t1 = time.perf_counter()
     if config.search is None:
@@ -596,6 +640,8 @@ def train_category(
     }
     if search_record is not None:
         summary["search"] = search_record
+    if canonical_choice is not None:
+        summary["canonical_choice"] = canonical_choice
     params = {k: (asdict(v) if hasattr(v, "__dataclass_fields__") else v) for k, v in asdict(config).items()}
     for run_only in ("cache_dir", "workers", "ray"):
         params.pop(run_only, None)
