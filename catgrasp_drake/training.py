@@ -525,8 +525,9 @@ def choose_canonical_by_region(clouds, region_centres, shape_kwargs: dict, progr
     lowest mean error, the mean error of every candidate (m), the chosen candidate's space).
 
     A grasp is anchored at the region, so this is the error with which the canonical grasp starts on every
-    training instance (a flat spray bottle as canonical: 7.6 mm mean, 22.5 mm on the deep ones; a deep
-    one: 2.2-2.8 mm, training.md). It costs one shape space per instance (K * (K - 1) registrations).
+    training instance (session-16 spray bottles: the first, flat one as canonical 8.1 mm mean, up to 22.5 mm
+    on the deep ones; the deep ones 2.4-4.1 mm; training.md). It costs one shape space per instance
+    (K * (K - 1) registrations).
     """
     centres = np.asarray(region_centres, float)
     K = len(clouds)
