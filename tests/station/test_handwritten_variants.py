@@ -86,7 +86,8 @@ def test_the_sweep_reads_posture_overrides_from_the_command_line():
 @pytest.mark.slow
 def test_the_sweeps_mass_scale_makes_the_object_heavier_in_the_simulation():
     """``--mass-scale``: spray_bottle_00 (0.69 kg) is held by its hand-written grasp; 30 times heavier (21 kg, past
-    what the hand's effort-limited fingers can hold) it is not lifted."""
+    what the hand's effort-limited fingers can hold) it is not held: not lifted, or (the session-16 grasp, whose
+    fingers close under the head) lifted on the fingers and then shaken loose."""
     import sys
     from pathlib import Path
 
@@ -96,4 +97,4 @@ def test_the_sweeps_mass_scale_makes_the_object_heavier_in_the_simulation():
     spec = {"category": "spray_bottle", "instance": "spray_bottle_00"}
     assert sweep_task(spec)["grasp"]
     heavy = sweep_task(spec | {"mass_scale": 30.0})
-    assert not heavy["grasp"] and heavy["reason"] in ("not_lifted", "lifted_short", "slipped"), heavy
+    assert not heavy["grasp"] and heavy["reason"] in ("not_lifted", "lifted_short", "slipped", "shaken_loose"), heavy
