@@ -142,15 +142,23 @@ _SPRAY_TRIGGER_LENGTH = (0.030, 0.048)
 _SPRAY_TRIGGER_GAP = (0.010, 0.018)  # between the neck and the trigger lever
 
 
+#: How far the shoulder's back reaches behind a deep bottle's neck axis, :data:`SHOULDER_DOME_DEPTH` under the
+#: shoulder's top (m): from about the straight shoulder's (2 cm) to the Windex bottle's (3.5 cm: its back
+#: stays full up to the neck while the front slopes straight into it).
+SPRAY_SHOULDER_BACK = (0.02, 0.037)
+SHOULDER_DOME_DEPTH = 0.02
+
+
 def spray_bottle_params(rng: np.random.Generator) -> dict[str, float]:
     """Proportions of a spray bottle: a flat body (the paper's CAD bottles) or, one in two, a deep
     one like the YCB Windex bottle: the shoulder tapers over 7-11 cm into a thin neck 3.5-5.5 cm long
     near the body's axis whose top 1.8-3.0 cm is the sprayer's screw cap (2.8-3.4 cm across), under a
     low head (2.2-3.0 cm) that reaches 3.0-4.5 cm behind the neck and 5.2-6.2 cm ahead of it, with a
-    2.5-3.6 cm trigger 1.2-2.0 cm in front of the cap. Every bottle is filled to 350-1100 kg/m^3 (a full
-    1 L bottle weighs 1.0 kg).
+    2.5-3.6 cm trigger 1.2-2.0 cm in front of the cap; its shoulder's back is domed, reaching 2.0-3.7 cm
+    behind the neck 2 cm under the shoulder's top (the Windex bottle: 3.5 cm) where the front slopes
+    straight into the neck. Every bottle is filled to 350-1100 kg/m^3 (a full 1 L bottle weighs 1.0 kg).
 
-    The draws that extend the first family (style, deep proportions, fill) come after its own, so
+    The draws that extend the first family (style, deep proportions, fill, cap, dome) come after its own, so
     a flat bottle's proportions are those the generator drew before the extension; a deep bottle's
     head and trigger are its own draws mapped onto the deep ranges (:func:`_remap`).
     """
@@ -197,7 +205,26 @@ def spray_bottle_params(rng: np.random.Generator) -> dict[str, float]:
     cap = {"cap_radius": _u(rng, 0.014, 0.017), "cap_height": _u(rng, 0.018, 0.030)}
     if deep:  # the sprayer's screw cap (a 28-32 mm closure) at the top of the thin neck, under the head
         p.update(cap)
+    shoulder_back = _u(rng, *SPRAY_SHOULDER_BACK)
+    if deep:  # how far the shoulder's back reaches behind the neck 2 cm under its top (the Windex bottle's: 3.5 cm)
+        p["shoulder_back"] = shoulder_back
     return p
+
+
+def _domed_back_section(p: dict[str, float]):
+    """The section, :data:`SHOULDER_DOME_DEPTH` under the shoulder's top, that makes a deep bottle's
+    shoulder domed at the back: across (x) and in front of the neck as the straight shoulder there, but
+    reaching ``shoulder_back`` behind the neck's axis (at least as far as the straight shoulder, never past
+    the body's back)."""
+    w, d, h, sh, nr = p["body_width"], p["body_depth"], p["body_height"], p["shoulder_height"], p["neck_radius"]
+    oy = p.get("neck_offset_y", 0.0)
+    f = SHOULDER_DOME_DEPTH / sh  # the straight shoulder's radii there: f of the way from the neck to the body
+    rx = 1.25 * nr + f * (w / 2 - 1.25 * nr)
+    front = (1 - f) * (oy + 1.25 * nr) + f * d / 2 - oy  # in front of the neck's axis
+    straight_back = oy - ((1 - f) * (oy - 1.25 * nr) - f * d / 2)
+    back = float(np.clip(p["shoulder_back"], straight_back, d / 2 + oy - 0.002))
+    return shapes.elliptic_slab((0.0, oy + (front - back) / 2, h - SHOULDER_DOME_DEPTH), rx, (front + back) / 2,
+                                0.004)
 
 
 def _remap(value: float, drawn_in: tuple[float, float], onto: tuple[float, float]) -> float:
@@ -211,12 +238,15 @@ def build_spray_bottle(p: dict[str, float]) -> GeneratedInstance:
     nr = p["neck_radius"]
     oy = p.get("neck_offset_y", 0.0)  # the neck, head and trigger sit this far along y from the body's axis
     # body: hull of elliptic sections (bottom, waist, top of wall, shoulder into the neck)
-    body = Manifold.batch_hull([
+    sections = [
         shapes.elliptic_slab((0.0, 0.0, 0.003), w / 2 * 0.96, d / 2 * 0.96, 0.006),
         shapes.elliptic_slab((0.0, 0.0, 0.012), w / 2, d / 2, 0.006),
         shapes.elliptic_slab((0.0, 0.0, h - sh), w / 2, d / 2, 0.004),
         shapes.elliptic_slab((0.0, oy, h), nr * 1.25, nr * 1.25, 0.004),
-    ])
+    ]
+    if "shoulder_back" in p:  # a domed back: the shoulder's back stays full up to the neck (_domed_back_section)
+        sections.append(_domed_back_section(p))
+    body = Manifold.batch_hull(sections)
     if p["waist"] < 0.99:  # a grip waist: cut the sides with two large ellipsoids
         cut_r = w * 0.5
         inset = w / 2 * (1 - p["waist"])

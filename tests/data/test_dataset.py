@@ -104,6 +104,35 @@ def test_deep_spray_bottles_are_drawn_with_thin_necks_free_triggers_and_their_ow
     assert max(masses) > 0.9 and min(masses) < 0.3
 
 
+def test_a_deep_bottles_shoulder_is_domed_at_the_back_by_its_draw_and_flat_bottles_are_untouched():
+    """A deep bottle's shoulder reaches ``shoulder_back`` behind the neck's axis 2 cm under its top (the
+    Windex bottle: 3.5 cm, its front sloping straight into the neck), while the straight shoulder of the
+    same bottle (the draw removed) reaches about 2 cm; in front of the neck both are the same. The
+    draw comes last, so a flat bottle's parameters are what the generator drew before it."""
+    from catgrasp_drake.data.categories import (
+        SHOULDER_DOME_DEPTH,
+        SPRAY_SHOULDER_BACK,
+        build_spray_bottle,
+        spray_bottle_params,
+    )
+
+    draws = [spray_bottle_params(np.random.default_rng([99, i])) for i in range(40)]
+    assert all(("shoulder_back" in p) == bool(p["deep"]) for p in draws)
+    assert all(SPRAY_SHOULDER_BACK[0] <= p["shoulder_back"] <= SPRAY_SHOULDER_BACK[1] for p in draws if p["deep"])
+    p = next(p for p in draws if p["deep"])
+    p = {**p, "shoulder_back": 0.035, "body_depth": 0.09}
+
+    def reach(params):  # (behind, in front of) the neck's axis, 2 cm under the shoulder's top (m)
+        z = params["body_height"] - SHOULDER_DOME_DEPTH
+        y = build_spray_bottle(params).mesh.section(plane_origin=[0, 0, z], plane_normal=[0, 0, 1]).vertices[:, 1]
+        return params["neck_offset_y"] - y.min(), y.max() - params["neck_offset_y"]
+
+    (domed_back, domed_front), (straight_back, straight_front) = reach(p), reach(
+        {k: v for k, v in p.items() if k != "shoulder_back"})
+    assert abs(domed_back - 0.035) < 0.001 and straight_back < 0.026
+    assert abs(domed_front - straight_front) < 0.001
+
+
 def test_variation_is_more_than_a_global_scale():
     ext = np.array([load_mesh("drill", n).extents for n in list_instances("drill")])
     ratios = ext[:, 2] / ext[:, 1]  # height / length
