@@ -62,7 +62,8 @@ def test_handwritten_grasp_holds_instances_the_upright_palm_knocked_over(categor
     spray_bottle_03's index finger ends a few mm beside its trigger: ``trigger_missed``. Since session 15
     spray_bottle_03 is one of the deep-bodied, thin-necked bottles, which the grasp moved 15 mm toward the
     neck holds: grasped, trigger missed, tilt 11 deg. Since session 16 its neck is long and capped and its
-    head Windex-like, and the grasp, moved 6 mm forward, 8 mm up and 4 mm in, is functional on it: tilt 6 deg.)"""
+    head Windex-like, and the grasp, moved 6 mm forward, 8 mm up and 4 mm in, is functional on it: tilt 6 deg.
+    Session 17: its shoulder slightly domed (2.1 cm) and the index squeezing, functional, tilt 2.7 deg.)"""
     from catgrasp_drake.station.scenario import with_instance
 
     scenario = with_instance(load_scenario(f"{category}_default"), instance)
