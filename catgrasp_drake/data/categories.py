@@ -147,6 +147,8 @@ _SPRAY_TRIGGER_GAP = (0.010, 0.018)  # between the neck and the trigger lever
 #: stays full up to the neck while the front slopes straight into it).
 SPRAY_SHOULDER_BACK = (0.02, 0.037)
 SHOULDER_DOME_DEPTH = 0.02
+#: The shoulder's top section (where it meets the neck) is a circle this many neck radii across.
+SHOULDER_TOP_RADIUS_FACTOR = 1.25
 
 
 def spray_bottle_params(rng: np.random.Generator) -> dict[str, float]:
@@ -216,12 +218,17 @@ def _domed_back_section(p: dict[str, float]):
     shoulder domed at the back: across (x) and in front of the neck as the straight shoulder there, but
     reaching ``shoulder_back`` behind the neck's axis (at least as far as the straight shoulder, never past
     the body's back)."""
-    w, d, h, sh, nr = p["body_width"], p["body_depth"], p["body_height"], p["shoulder_height"], p["neck_radius"]
+    w, d, h, sh = p["body_width"], p["body_depth"], p["body_height"], p["shoulder_height"]
     oy = p.get("neck_offset_y", 0.0)
-    f = SHOULDER_DOME_DEPTH / sh  # the straight shoulder's radii there: f of the way from the neck to the body
-    rx = 1.25 * nr + f * (w / 2 - 1.25 * nr)
-    front = (1 - f) * (oy + 1.25 * nr) + f * d / 2 - oy  # in front of the neck's axis
-    straight_back = oy - ((1 - f) * (oy - 1.25 * nr) - f * d / 2)
+    r = SHOULDER_TOP_RADIUS_FACTOR * p["neck_radius"]
+    f = SHOULDER_DOME_DEPTH / sh  # the straight shoulder there: f of the way from its top section to the body's
+
+    def straight(at_top, at_body):
+        return (1 - f) * at_top + f * at_body
+
+    rx = straight(r, w / 2)
+    front = straight(oy + r, d / 2) - oy  # reaches in front of / behind the neck's axis
+    straight_back = oy - straight(oy - r, -d / 2)
     back = float(np.clip(p["shoulder_back"], straight_back, d / 2 + oy - 0.002))
     return shapes.elliptic_slab((0.0, oy + (front - back) / 2, h - SHOULDER_DOME_DEPTH), rx, (front + back) / 2,
                                 0.004)
@@ -242,7 +249,7 @@ def build_spray_bottle(p: dict[str, float]) -> GeneratedInstance:
         shapes.elliptic_slab((0.0, 0.0, 0.003), w / 2 * 0.96, d / 2 * 0.96, 0.006),
         shapes.elliptic_slab((0.0, 0.0, 0.012), w / 2, d / 2, 0.006),
         shapes.elliptic_slab((0.0, 0.0, h - sh), w / 2, d / 2, 0.004),
-        shapes.elliptic_slab((0.0, oy, h), nr * 1.25, nr * 1.25, 0.004),
+        shapes.elliptic_slab((0.0, oy, h), SHOULDER_TOP_RADIUS_FACTOR * nr, SHOULDER_TOP_RADIUS_FACTOR * nr, 0.004),
     ]
     if "shoulder_back" in p:  # a domed back: the shoulder's back stays full up to the neck (_domed_back_section)
         sections.append(_domed_back_section(p))
