@@ -104,11 +104,12 @@ def test_deep_spray_bottles_are_drawn_with_thin_necks_free_triggers_and_their_ow
     assert max(masses) > 0.9 and min(masses) < 0.3
 
 
-def test_a_deep_bottles_shoulder_is_domed_at_the_back_by_its_draw_and_flat_bottles_are_untouched():
+def test_a_deep_bottles_shoulder_is_domed_at_the_back_by_its_draw_which_only_deep_bottles_make():
     """A deep bottle's shoulder reaches ``shoulder_back`` behind the neck's axis 2 cm under its top (the
     Windex bottle: 3.5 cm, its front sloping straight into the neck), while the straight shoulder of the
-    same bottle (the draw removed) reaches about 2 cm; in front of the neck both are the same. The
-    draw comes last, so a flat bottle's parameters are what the generator drew before it."""
+    same bottle (the draw removed) reaches about 2 cm; in front of the neck both are the same. Flat
+    bottles carry no draw (that their files did not change is the committed data set regenerating
+    byte for byte: ``test_dataset_regenerates_byte_for_byte``)."""
     from catgrasp_drake.data.categories import (
         SHOULDER_DOME_DEPTH,
         SPRAY_SHOULDER_BACK,

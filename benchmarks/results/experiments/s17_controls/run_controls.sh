@@ -19,13 +19,14 @@ for variant in s16model noindex; do
 import sys
 from dataclasses import replace
 from catgrasp_drake.category_model import CategoryModel
-from catgrasp_drake.grasping.descriptor import descriptor_size
+from catgrasp_drake.robot.models import HAND_ACTUATED_JOINTS
 path = sys.argv[1]
 m = CategoryModel.load(path)
 assert abs(m.regressor.coef).max() < 1e-9, "expects a regressor without shape dependence (the mean)"
 b = m.regressor.intercept.copy()
-closed = descriptor_size(len(m.template.poses)) - 9  # the closed posture: the last 9 entries
-b[closed + 2], b[closed + 3] = 0.7227, 0.496  # index proximal, index distal (HAND_ACTUATED_JOINTS order)
+closed = len(b) - len(HAND_ACTUATED_JOINTS)  # the descriptor ends with the closed posture (REGRESSED_POSTURES)
+for joint, angle in (("svh_index_proximal", 0.7227), ("svh_index_distal", 0.496)):
+    b[closed + HAND_ACTUATED_JOINTS.index(joint)] = angle
 m = replace(m, regressor=replace(m.regressor, intercept=b))
 m.save(path)
 PY
