@@ -456,6 +456,9 @@ def _cmd_import_object(args) -> int:
     if not imported.regions:
         print("  region     none")
     print(f"  mass       {imported.mass_kg:.3f} kg ({rec['mass_source']}); collision mesh: {rec['collision_mesh']}")
+    margin_mm = 1000 * rec["support_margin_m"]
+    print(f"  stands     {'yes' if rec['stands'] else 'NO'}: its centre of mass is {abs(margin_mm):.0f} mm "
+          f"{'inside' if rec['stands'] else 'outside'} its base")
     t0 = time.perf_counter()
     from catgrasp_drake.viz.sheets import import_sheet
 
@@ -464,6 +467,9 @@ def _cmd_import_object(args) -> int:
     png = import_sheet(imported.directory, reference_dir=folder_canonical)
     print(f"wrote {imported.directory}/ ({imported.name}.obj, {imported.name}.sdf, annotations.json) and {png} "
           f"in {t_import + time.perf_counter() - t0:.1f} s")
+    if not rec["stands"]:
+        print("warning: it falls over by itself on the table, so no grasp from the table can be tested on it "
+              "(a corded drill without a battery base?); check the alignment's up direction", file=sys.stderr)
     if imported.confidence is not None and imported.confidence < LOW_CONFIDENCE:
         print(f"warning: the fit's confidence {imported.confidence:.2f} is below {LOW_CONFIDENCE}: check {png} "
               "and pass --transform if the alignment is wrong", file=sys.stderr)
@@ -685,8 +691,9 @@ def build_parser() -> argparse.ArgumentParser:
 
     b = sub.add_parser("benchmark", help="the project's measure: held-out objects, every method through the "
                        "transfer diagram, varied placements, the strict judge, intervals")
-    b.add_argument("--split", choices=("test", "ycb", "smoke", "objects"), default=None,
+    b.add_argument("--split", choices=("test", "ycb", "ais", "smoke", "objects"), default=None,
                    help="test (default): generated from the fixed test seed; ycb: real scans (extra .[ycb]); "
+                        "ais: the 11 real AIS drill clouds (../shared/datasets/ais_drills); "
                         "smoke: 2 drills; objects: the --objects")
     b.add_argument("--model", default=None, metavar="FILE",
                    help="with --objects: the model of their category to use (e.g. a category folder's, "
@@ -821,8 +828,8 @@ def main(argv=None) -> int:
     args = build_parser().parse_args(argv)
     try:
         return int(args.func(args) or 0)
-    except CatgraspError as e:
-        print(f"catgrasp: error: {one_line(e, with_type=False)}", file=sys.stderr)
+    except CatgraspError as e:  # our own one-line messages, whole: their end says what to do
+        print(f"catgrasp: error: {one_line(e, with_type=False, limit=None)}", file=sys.stderr)
         return 2
     except (OSError, ImportError) as e:  # a file system problem, a missing optional library: no traceback
         print(f"catgrasp: error: {type(e).__name__}: {one_line(e, with_type=False)}", file=sys.stderr)

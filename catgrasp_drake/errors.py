@@ -17,15 +17,16 @@ class ModelFileError(CatgraspError, OSError):
     """A model, mesh or data file is missing, unreadable, corrupt or of another format version."""
 
 
-def one_line(e: BaseException, *, with_type: bool = True, limit: int = 160) -> str:
-    """The first line of ``e``'s message (at most ``limit`` characters), prefixed by its type name.
+def one_line(e: BaseException, *, with_type: bool = True, limit: int | None = 160) -> str:
+    """The first line of ``e``'s message (at most ``limit`` characters; None: all of it), prefixed by its
+    type name.
 
     For wrapping a third-party exception into one of ours: library messages
     can span many lines (PyYAML, zipfile quoting raw bytes, Drake traces).
     """
     text = str(e).strip()
     first = text.splitlines()[0] if text else ""
-    if len(first) > limit:
+    if limit is not None and len(first) > limit:
         first = first[:limit - 3] + "..."
     if not with_type:
         return first or type(e).__name__

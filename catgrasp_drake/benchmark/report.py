@@ -41,8 +41,9 @@ SEED = 0
 LEVEL = 0.95
 DEFAULT_PHYSICS = "default"
 #: Display orders (values not listed follow, sorted by name).
-SPLITS = ("test", "ycb")
-SPLIT_TITLES = {"test": "held-out generated instances", "ycb": "real scans (YCB)", "smoke": "smoke run"}
+SPLITS = ("test", "ycb", "ais")
+SPLIT_TITLES = {"test": "held-out generated instances", "ycb": "real scans (YCB)",
+                "ais": "real drills (AIS clouds; trigger transferred by the fit)", "smoke": "smoke run"}
 CATEGORIES = ("drill", "spray_bottle", "mug")
 VIEWS = ("single", "active", "two", "full")
 METHODS = ("latent", "latent_map", "paper", "nearest", "rigid", "cpd", "true_object")

@@ -9,6 +9,13 @@ are the train/tune split):
 ``ycb``    the real YCB scans with a functional part: 035 power drill, 022
            Windex bottle, 025 mug (optional extra ``.[ycb]``; prepared into
            ``<data_dir>/ycb`` with their stated alignments).
+``ais``    the 11 real drills of the paper authors' data set (``../shared/datasets/ais_drills``,
+           CAD-derived clouds on a ~1 cm grid, already in the canonical frame; never copied into the
+           repository): imported by :func:`catgrasp_drake.data.importer.import_object` (Poisson
+           surface, the category's density, the trigger transferred by the committed drill model's
+           fit -- not annotated by hand, so "functional" is judged on an estimated trigger) into
+           ``<data_dir>/ais``. Drills only; the environment variable ``CATGRASP_AIS_DRILLS`` names
+           another folder of ``drill_<n>.pcd`` files.
 ``smoke``  the first two test drills, one placement, latent and rigid: the CI run.
 ``objects`` the user's imported objects (``catgrasp import-object``), one directory each in
            ``BenchmarkConfig.objects``; their records go to ``out/benchmark/``, not the committed tables.
@@ -32,6 +39,7 @@ interrupted run resumes), and the records (JSON lines) are written with
 from __future__ import annotations
 
 import hashlib
+import json
 import math
 import time
 import zlib
@@ -48,7 +56,7 @@ from catgrasp_drake.transfer import VIEWS
 
 #: The test split's data-set seed. Fixed; nothing (grasps, kernels, thresholds) is chosen on it.
 TEST_SEED = 7919
-SPLITS = ("test", "ycb", "smoke", "objects")
+SPLITS = ("test", "ycb", "ais", "smoke", "objects")
 #: The YCB scans of each category that have the category's functional part.
 YCB_BY_CATEGORY = {"drill": ("ycb_035",), "spray_bottle": ("ycb_022",), "mug": ("ycb_025",)}
 BENCHMARK_METHODS = ("latent", "latent_map", "paper", "nearest", "rigid", "cpd")
@@ -185,6 +193,9 @@ def split_objects(config: BenchmarkConfig) -> list[BenchmarkObject]:
             seen[name] = directory
             if category in config.categories:
                 out.append(BenchmarkObject("objects", category, name, str(directory)))
+    elif config.split == "ais":
+        if "drill" in config.categories:
+            out += _ais_drills(Path(config.data_dir) / "ais", config.instances)
     else:  # ycb
         from catgrasp_drake.data.ycb import prepare_ycb, ycb_dir
 
@@ -201,6 +212,49 @@ def split_objects(config: BenchmarkConfig) -> list[BenchmarkObject]:
                 out.append(BenchmarkObject("ycb", category, name, str(directory)))
     if config.instances is not None:
         out = [o for o in out if o.instance in config.instances]
+    return out
+
+
+def ais_drills_dir() -> Path:
+    """The folder of the real AIS drill clouds: ``$CATGRASP_AIS_DRILLS``, else ``../shared/datasets/ais_drills``
+    beside the repository."""
+    import os
+
+    given = os.environ.get("CATGRASP_AIS_DRILLS")
+    return Path(given) if given else Path(__file__).resolve().parents[3] / "shared" / "datasets" / "ais_drills"
+
+
+def _ais_drills(root: Path, only=None) -> list[BenchmarkObject]:
+    """The AIS drills that stand on their base, as imported objects under ``root`` (imported again when the
+    import code or the drill model changed); InputError when their folder is absent."""
+    from catgrasp_drake.category_model import CategoryModel
+    from catgrasp_drake.data.importer import import_object
+    from catgrasp_drake.demo import default_model_path
+
+    source = ais_drills_dir()
+    clouds = sorted(source.glob("drill_*.pcd"), key=lambda f: int(f.stem.split("_")[-1]) if
+                    f.stem.split("_")[-1].isdigit() else 0)
+    if not clouds:
+        raise InputError(f"split ais: no drill_<n>.pcd clouds in {source} (the shared data set is not beside the "
+                         "repository; set CATGRASP_AIS_DRILLS to their folder)")
+    model_path = Path(default_model_path("drill"))
+    stamp = f"{_data_code_version('importer.py', 'meshes.py', 'dataset.py', 'cloud_io.py')} {file_sha256(model_path)}"
+    model, out = None, []
+    for cloud in clouds:
+        name = f"ais_{cloud.stem}"
+        if only is not None and name not in only:
+            continue
+        directory = root / "drill" / name
+        marker = directory / "PREPARED_BY"
+        if not (directory / f"{name}.sdf").is_file() or not marker.is_file() or marker.read_text().strip() != stamp:
+            model = model or CategoryModel.load(model_path)
+            # the clouds are in the canonical frame already: the identity, stated
+            import_object(cloud, "drill", model=model, transform="0 0 0 0 0 0", out=directory, name=name)
+            atomic_write_text(marker, stamp + "\n")
+        if json.loads((directory / "annotations.json").read_text())["import"]["stands"]:
+            out.append(BenchmarkObject("ais", "drill", name, str(directory)))
+        # else: it falls over by itself (drill_2, drill_3, drill_9: corded drills' narrow handle ends); no
+        # grasp from the table can be tested on it
     return out
 
 
@@ -364,7 +418,7 @@ def trial_specs(config: BenchmarkConfig, model_paths: dict[str, str] | None = No
         # changed import): its files are part of the cache key
         own = ({"object_sha256": hashlib.sha256(b"".join(file_sha256(Path(obj.model_dir) / f).encode() for f in (
             f"{obj.instance}.obj", f"{obj.instance}.sdf", "annotations.json"))).hexdigest()}
-               if obj.split in ("objects", "ycb") else {})
+               if obj.split in ("objects", "ycb", "ais") else {})
         for view in config.views:
             for trial in range(placements):
                 for method in config.methods:

@@ -158,12 +158,15 @@ def _check_ply(path: Path, head: bytes, size: int) -> None:
             raise _too_short(path, n, n * row, have)
 
 
-def read_point_cloud(path: str | os.PathLike, *, check_units: bool = True) -> np.ndarray:
+def read_point_cloud(path: str | os.PathLike, *, check_units: bool = True, with_normals: bool = False):
     """Read a cloud file into an ``(N, 3)`` float64 array (metres).
 
+    ``with_normals``: return ``(points, normals)``, the normals (N, 3), unit length, as the file stores
+    them (.pcd/.ply ``normal_x`` ... fields), or None when the file has none (or any is zero or NaN).
     Raises ModelFileError (missing/unreadable file) or InputError (empty cloud,
     NaN/inf, millimetre units) with a one-line message.
     """
+    normals = None
     path = _as_path(path)
     suffix = _suffix(path)
     if not path.is_file():
@@ -186,7 +189,20 @@ def read_point_cloud(path: str | os.PathLike, *, check_units: bool = True) -> np
         points = np.asarray(cloud.points, dtype=np.float64)
         if points.size == 0:
             raise InputError(f"{path}: no points could be read (empty or corrupt {suffix} file)")
-    return as_points(points, str(path), check_units=check_units)
+        if with_normals:
+            normals = _usable_normals(np.asarray(cloud.normals, dtype=np.float64), len(points))
+    points = as_points(points, str(path), check_units=check_units)
+    return (points, normals) if with_normals else points
+
+
+def _usable_normals(normals: np.ndarray, n: int) -> np.ndarray | None:
+    """The file's normals, unit length, if every point has a finite, nonzero one; else None."""
+    if normals.shape != (n, 3) or not np.all(np.isfinite(normals)):
+        return None
+    length = np.linalg.norm(normals, axis=1)
+    if n == 0 or float(length.min()) < 1e-6:
+        return None
+    return normals / length[:, None]
 
 
 def _as_path(path) -> Path:

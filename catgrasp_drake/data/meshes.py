@@ -120,6 +120,31 @@ def _manifold(mesh: trimesh.Trimesh):
                                                tri_verts=np.asarray(mesh.faces, np.uint32)))
 
 
+#: Vertices this close above an object's lowest point carry it on the table (its support polygon), m.
+SUPPORT_BAND_M = 0.0015
+
+
+def support_margin(mesh: trimesh.Trimesh, center_of_mass, band_m: float = SUPPORT_BAND_M) -> float:
+    """How far (m) the centre of mass's vertical projection lies inside the object's support polygon.
+
+    The polygon is the convex hull (x, y) of the vertices within ``band_m`` of the lowest one (the
+    object standing on z = min). Positive: it stands; negative: the projection is that far outside and
+    the object falls over by itself (a corded drill without a battery on its base, a scan whose base
+    was not measured). A base of fewer than three points, or all on a line, counts as outside by the
+    projection's distance to the nearest of them.
+    """
+    from scipy.spatial import ConvexHull, QhullError
+
+    v = np.asarray(mesh.vertices, float)
+    c = np.asarray(center_of_mass, float).reshape(-1)[:2]
+    low = v[v[:, 2] <= v[:, 2].min() + band_m][:, :2]
+    try:
+        eq = ConvexHull(low).equations  # n . p + d <= 0 inside, |n| = 1
+    except (QhullError, ValueError):
+        return -float(np.linalg.norm(low - c, axis=1).min())
+    return float(-(eq[:, :2] @ c + eq[:, 2]).max())
+
+
 def flatten_base(mesh: trimesh.Trimesh, depth_m: float) -> tuple[trimesh.Trimesh, bool]:
     """``mesh`` (upright: z up, base at its lowest point) with its lowest ``depth_m`` cut off by a
     horizontal plane and the cut closed flat (manifold3d's ``trim_by_plane``), then moved down by

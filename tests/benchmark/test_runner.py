@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import json
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -253,3 +255,34 @@ def test_benchmark_merge_rewrites_only_the_rerun_trials(tmp_path, monkeypatch):
     assert load_benchmark_records(out) == [record("drill", 0, True)] + rerun
     assert main(args) == 0
     assert load_benchmark_records(out) == rerun
+
+
+def test_the_ais_split_imports_the_real_drills_once(tmp_path, monkeypatch, ais_drill_paths):
+    """The split 'ais': each real drill cloud imported (its own normals, the stated identity alignment, a
+    transferred trigger), prepared once and kept while the import code and the drill model are the same."""
+    from catgrasp_drake.benchmark.runner import split_objects
+
+    cfg = BenchmarkConfig(split="ais", instances=("ais_drill_4",), data_dir=str(tmp_path), placements=2,
+                          methods=("latent",))
+    (obj,) = split_objects(cfg)
+    assert (obj.split, obj.category, obj.instance) == ("ais", "drill", "ais_drill_4")
+    ann = json.loads((tmp_path / "ais" / "drill" / "ais_drill_4" / "annotations.json").read_text())
+    rec = ann["import"]
+    assert rec["source"]["reconstruction"]["normals"] == "the cloud's own"
+    # the stated identity, levelled on the reconstructed base by less than a degree
+    assert not rec["transform"]["automatic"] and max(map(abs, rec["transform"]["rpy_deg"])) < 1.0
+    assert "trigger" in ann["regions"]
+    assert 0.18 < ann["bbox_max"][2] < 0.24  # drill_4 stands 0.21 m tall (the cloud's own height)
+    sdf = tmp_path / "ais" / "drill" / "ais_drill_4" / "ais_drill_4.sdf"
+    mtime = sdf.stat().st_mtime_ns
+    specs = trial_specs(cfg)
+    assert len(specs) == 2 and all(len(s["object_sha256"]) == 64 for s in specs)
+    assert sdf.stat().st_mtime_ns == mtime  # prepared once
+    assert split_objects(BenchmarkConfig(split="ais", categories=("mug",), data_dir=str(tmp_path))) == []
+    # drill_3, a corded drill whose narrow handle end is its base, falls over by itself: left out
+    assert split_objects(replace(cfg, instances=("ais_drill_3",))) == []
+    rec3 = json.loads((tmp_path / "ais" / "drill" / "ais_drill_3" / "annotations.json").read_text())["import"]
+    assert not rec3["stands"] and rec3["support_margin_m"] < -0.02 and rec["stands"]
+    monkeypatch.setenv("CATGRASP_AIS_DRILLS", str(tmp_path / "nowhere"))
+    with pytest.raises(InputError, match="no drill_<n>.pcd clouds in .*CATGRASP_AIS_DRILLS"):
+        split_objects(BenchmarkConfig(split="ais", data_dir=str(tmp_path)))

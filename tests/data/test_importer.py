@@ -170,6 +170,53 @@ def test_a_point_cloud_is_reconstructed_and_aligned(tmp_path, models):
     assert imported.mass_kg == pytest.approx(load_annotations("drill", "drill_05")["mass_kg"], rel=0.10)
 
 
+def _sparse_sphere_cloud(n=400, radius=0.05, seed=3):
+    """A sparse cloud on a sphere standing on z = 0, with its exact outward normals (a CAD model's)."""
+    rng = np.random.default_rng(seed)
+    u = rng.normal(size=(n, 3))
+    u /= np.linalg.norm(u, axis=1, keepdims=True)
+    return radius * u + [0.0, 0.0, radius], u
+
+
+def test_a_clouds_own_normals_are_read_and_used_for_the_reconstruction(tmp_path):
+    import open3d as o3d
+
+    from catgrasp_drake.data.cloud_io import read_point_cloud
+    from catgrasp_drake.data.importer import read_object_file, reconstruct_from_cloud
+
+    p, n = _sparse_sphere_cloud()
+    with_normals, bare = tmp_path / "normals.pcd", tmp_path / "bare.pcd"
+    cloud = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(p))
+    o3d.io.write_point_cloud(str(bare), cloud)
+    cloud.normals = o3d.utility.Vector3dVector(-n)  # stored inward: turned outward by the majority rule
+    o3d.io.write_point_cloud(str(with_normals), cloud)
+    points, normals = read_point_cloud(with_normals, with_normals=True)
+    assert np.allclose(normals, -n, atol=1e-6) and np.allclose(points, p, atol=1e-9)
+    assert read_point_cloud(bare, with_normals=True)[1] is None
+    assert isinstance(read_point_cloud(bare), np.ndarray)  # unchanged without the flag
+    f = read_object_file(with_normals)
+    mesh, info = reconstruct_from_cloud(f.points, f.normals)
+    assert info["normals"] == "the cloud's own" and mesh.is_watertight
+    # the sphere's volume, 4/3 pi r^3, within the Poisson surface's smoothing
+    assert mesh.volume == pytest.approx(4 / 3 * np.pi * 0.05 ** 3, rel=0.1)
+    assert reconstruct_from_cloud(f.points)[1]["normals"].startswith("estimated")
+    again, _ = reconstruct_from_cloud(f.points, f.normals)  # the same surface every time (one thread)
+    assert np.array_equal(again.vertices, mesh.vertices) and np.array_equal(again.faces, mesh.faces)
+
+
+def test_a_clouds_normals_that_are_not_usable_are_ignored(tmp_path):
+    import open3d as o3d
+
+    from catgrasp_drake.data.cloud_io import read_point_cloud
+
+    p, n = _sparse_sphere_cloud()
+    n[5] = 0.0  # one point without a normal: none of them is trusted
+    cloud = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(p))
+    cloud.normals = o3d.utility.Vector3dVector(n)
+    o3d.io.write_point_cloud(str(tmp_path / "c.ply"), cloud)
+    assert read_point_cloud(tmp_path / "c.ply", with_normals=True)[1] is None
+
+
 # ----------------------------------------------------------------------------- holes
 def _holed(mesh, n_faces):
     c = mesh.triangles_center
@@ -363,7 +410,13 @@ def test_cli_errors_are_one_line(tmp_path, capsys):
     mesh.apply_scale(1000.0)
     mm = _write_obj(tmp_path / "mm.obj", mesh)
     ok = _write_obj(tmp_path / "ok.obj", load_mesh("drill", "drill_05"))
+    whole = load_mesh("drill", "drill_05")
+    half = _write_obj(tmp_path / "half.obj", trimesh.Trimesh(whole.vertices, whole.faces[
+        whole.triangles_center[:, 0] < 0.0], process=True))
     for argv, what in [
+        # a message longer than a library's first line is printed whole: its end says what to do
+        (["import-object", half, "--category", "drill", "--transform", "0 0 0 0 0 0"],
+         "or give the mass (--mass KG)"),
         (["import-object", mm, "--category", "drill"], "millimetres: scale it by 0.001"),
         (["import-object", ok, "--category", "teapot"], "unknown category"),
         (["import-object", tmp_path / "none.obj", "--category", "drill"], "not found"),
@@ -419,3 +472,30 @@ def test_an_imported_object_is_trained_on_like_an_embedded_instance(imported_dir
         code, _, err = _cli(argv, capsys)
         lines = [ln for ln in err.splitlines() if ln.strip()]
         assert code != 0 and len(lines) == 1 and what in lines[0], (argv, err)
+
+
+def test_the_support_margin_is_the_centre_of_mass_distance_inside_the_base():
+    from catgrasp_drake.data.meshes import support_margin
+
+    box = trimesh.creation.box((0.08, 0.04, 0.2))  # base 8 x 4 cm on z = -0.1
+    assert support_margin(box, [0.0, 0.0, 0.0]) == pytest.approx(0.02)  # the nearer edge, 2 cm away
+    assert support_margin(box, [0.0, 0.03, 0.0]) == pytest.approx(-0.01)  # 1 cm beyond the edge: it falls
+    assert support_margin(box, [0.035, 0.0, 0.05]) == pytest.approx(0.005)  # height does not matter
+    tip = trimesh.creation.cone(0.03, 0.1)  # standing on its disc: stable about its axis
+    assert support_margin(tip, [0.0, 0.0, 0.03]) == pytest.approx(0.03, abs=2e-3)
+    tip.apply_transform(trimesh.transformations.rotation_matrix(np.pi, [1, 0, 0]))  # on its point
+    assert support_margin(tip, [0.0, 0.005, 0.0]) == pytest.approx(-0.005, abs=1e-6)
+
+
+def test_an_imported_object_that_cannot_stand_is_said_so(tmp_path, models, capsys):
+    mesh = load_mesh("drill", "drill_05")
+    ann = load_annotations("drill", "drill_05")
+    imported = import_mesh(mesh, "drill", "d", model=models("drill"), transform="0 0 0 0 0 0", out=tmp_path / "a")
+    assert imported.record["stands"] and imported.record["support_margin_m"] > 0.01
+    # the same drill turned over, standing on its chuck end: the centre of mass is far outside
+    T = transform_matrix((90.0, 0.0, 0.0), (0.0, 0.0, 0.0))
+    tipped = mesh.copy()
+    tipped.apply_transform(T)
+    imported = import_mesh(tipped, "drill", "d", model=models("drill"), transform=np.eye(4), mass_kg=ann["mass_kg"],
+                           out=tmp_path / "b")
+    assert not imported.record["stands"] and imported.record["support_margin_m"] < 0
