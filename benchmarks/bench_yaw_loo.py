@@ -67,7 +67,7 @@ def main(argv=None) -> int:
         ap.error("--extra and --placements: expected non-negative counts (placements >= 1)")
     model = CategoryModel.load(default_model_path(args.category), category=args.category)
     names = list(model.instances)
-    canonical = names.index(model.params.get("canonical_instance") or names[0])  # as catgrasp train chose it
+    canonical = names.index(model.canonical_instance)  # as catgrasp train chose it
     t0 = time.perf_counter()
     clouds = instance_clouds(args.category, names, CLOUD_VOXEL_M) + [
         full_cloud(generate_instance(args.category, np.random.default_rng(
