@@ -14,8 +14,9 @@ are the train/tune split):
            repository): imported by :func:`catgrasp_drake.data.importer.import_object` (Poisson
            surface, the category's density, the trigger transferred by the committed drill model's
            fit -- not annotated by hand, so "functional" is judged on an estimated trigger) into
-           ``<data_dir>/ais``. Drills only; the environment variable ``CATGRASP_AIS_DRILLS`` names
-           another folder of ``drill_<n>.pcd`` files.
+           ``<data_dir>/ais``; those that stand on their base (8 of 11: drill_2, 3 and 9 fall over by
+           themselves). Drills only; the environment variable ``CATGRASP_AIS_DRILLS`` names another
+           folder of ``drill_<n>.pcd`` files.
 ``smoke``  the first two test drills, one placement, latent and rigid: the CI run.
 ``objects`` the user's imported objects (``catgrasp import-object``), one directory each in
            ``BenchmarkConfig.objects``; their records go to ``out/benchmark/``, not the committed tables.
