@@ -39,9 +39,10 @@ interrupted run resumes), and the records (JSON lines) are written with
 
 from __future__ import annotations
 
+import functools
 import hashlib
-import json
 import math
+import os
 import time
 import zlib
 from dataclasses import dataclass, replace
@@ -205,22 +206,26 @@ def split_objects(config: BenchmarkConfig) -> list[BenchmarkObject]:
         for category in config.categories:
             for name in YCB_BY_CATEGORY[category]:
                 directory = ycb_dir(name, root)
-                marker = directory / "PREPARED_BY"
-                if not (directory / f"{name}.sdf").is_file() or not marker.is_file() \
-                        or marker.read_text().strip() != stamp:  # made by another version of the import
-                    prepare_ycb(root, [name])
-                    atomic_write_text(marker, stamp + "\n")
+                _prepared(directory, name, stamp, functools.partial(prepare_ycb, root, [name]))
                 out.append(BenchmarkObject("ycb", category, name, str(directory)))
     if config.instances is not None:
         out = [o for o in out if o.instance in config.instances]
     return out
 
 
+def _prepared(directory: Path, name: str, stamp: str, prepare) -> None:
+    """Call ``prepare()`` unless ``directory`` holds ``<name>.sdf`` and a ``PREPARED_BY`` marker saying ``stamp``
+    (the version of the code that makes it), then write the marker."""
+    marker = directory / "PREPARED_BY"
+    if (directory / f"{name}.sdf").is_file() and marker.is_file() and marker.read_text().strip() == stamp:
+        return
+    prepare()  # absent, or made by another version of the import
+    atomic_write_text(marker, stamp + "\n")
+
+
 def ais_drills_dir() -> Path:
     """The folder of the real AIS drill clouds: ``$CATGRASP_AIS_DRILLS``, else ``../shared/datasets/ais_drills``
     beside the repository."""
-    import os
-
     given = os.environ.get("CATGRASP_AIS_DRILLS")
     return Path(given) if given else Path(__file__).resolve().parents[3] / "shared" / "datasets" / "ais_drills"
 
@@ -229,30 +234,31 @@ def _ais_drills(root: Path, only=None) -> list[BenchmarkObject]:
     """The AIS drills that stand on their base, as imported objects under ``root`` (imported again when the
     import code or the drill model changed); InputError when their folder is absent."""
     from catgrasp_drake.category_model import CategoryModel
+    from catgrasp_drake.data.dataset import read_annotations
     from catgrasp_drake.data.importer import import_object
     from catgrasp_drake.demo import default_model_path
 
     source = ais_drills_dir()
-    clouds = sorted(source.glob("drill_*.pcd"), key=lambda f: int(f.stem.split("_")[-1]) if
-                    f.stem.split("_")[-1].isdigit() else 0)
+    clouds = sorted(source.glob("drill_*.pcd"), key=lambda f: (len(f.stem), f.stem))  # drill_2 before drill_10
     if not clouds:
         raise InputError(f"split ais: no drill_<n>.pcd clouds in {source} (the shared data set is not beside the "
                          "repository; set CATGRASP_AIS_DRILLS to their folder)")
     model_path = Path(default_model_path("drill"))
     stamp = f"{_data_code_version('importer.py', 'meshes.py', 'dataset.py', 'cloud_io.py')} {file_sha256(model_path)}"
-    model, out = None, []
+    drill_model = functools.cache(lambda: CategoryModel.load(model_path))  # loaded if a drill needs importing
+
+    def import_drill(cloud: Path, directory: Path, name: str) -> None:
+        # the clouds are in the canonical frame already: the identity, stated
+        import_object(cloud, "drill", model=drill_model(), transform="0 0 0 0 0 0", out=directory, name=name)
+
+    out = []
     for cloud in clouds:
         name = f"ais_{cloud.stem}"
         if only is not None and name not in only:
             continue
         directory = root / "drill" / name
-        marker = directory / "PREPARED_BY"
-        if not (directory / f"{name}.sdf").is_file() or not marker.is_file() or marker.read_text().strip() != stamp:
-            model = model or CategoryModel.load(model_path)
-            # the clouds are in the canonical frame already: the identity, stated
-            import_object(cloud, "drill", model=model, transform="0 0 0 0 0 0", out=directory, name=name)
-            atomic_write_text(marker, stamp + "\n")
-        if json.loads((directory / "annotations.json").read_text())["import"]["stands"]:
+        _prepared(directory, name, stamp, functools.partial(import_drill, cloud, directory, name))
+        if read_annotations(directory / "annotations.json")["import"]["stands"]:
             out.append(BenchmarkObject("ais", "drill", name, str(directory)))
         # else: it falls over by itself (drill_2, drill_3, drill_9: corded drills' narrow handle ends); no
         # grasp from the table can be tested on it
