@@ -11,7 +11,6 @@ objects (each folder: <name>.obj, <name>.sdf, annotations.json). A measurement, 
 from __future__ import annotations
 
 import argparse
-import re
 from pathlib import Path
 
 import numpy as np
@@ -20,8 +19,10 @@ import trimesh
 from catgrasp_drake.data.dataset import instance_dir, list_instances, read_annotations
 
 
-def section(mesh: trimesh.Trimesh, box: dict, below: float = 0.015):
-    lo, hi = np.asarray(box["min"]), np.asarray(box["max"])
+def handle_section(mesh: trimesh.Trimesh, trigger: dict, below: float = 0.015) -> tuple[float, float]:
+    """Width (x) and depth (y) of the handle's horizontal section ``below`` under the ``trigger`` box (m)."""
+    lo = np.asarray(trigger["center"]) - np.asarray(trigger["half_extents"])
+    hi = np.asarray(trigger["center"]) + np.asarray(trigger["half_extents"])
     z = lo[2] - below
     path = mesh.section(plane_origin=[0, 0, z], plane_normal=[0, 0, 1])
     if path is None:
@@ -36,12 +37,9 @@ def measure(directory: Path) -> dict:
     name = directory.name
     mesh = trimesh.load(directory / f"{name}.obj", force="mesh")
     ann = read_annotations(directory / "annotations.json")
-    c, h = np.asarray(ann["regions"]["trigger"]["center"]), np.asarray(ann["regions"]["trigger"]["half_extents"])
-    box = {"min": c - h, "max": c + h}
-    mass = float(re.search(r"<mass>([^<]+)</mass>", (directory / f"{name}.sdf").read_text()).group(1))
-    w, d = section(mesh, box)
-    ext = mesh.bounds[1] - mesh.bounds[0]
-    return {"name": name, "height": ext[2], "length": ext[1], "mass": mass, "handle_w": w, "handle_d": d}
+    w, d = handle_section(mesh, ann["regions"]["trigger"])
+    return {"name": name, "height": mesh.extents[2], "length": mesh.extents[1], "mass": ann["mass_kg"],
+            "handle_w": w, "handle_d": d}
 
 
 def main() -> None:
