@@ -5,7 +5,7 @@
                                          [--shift DX DY DZ] [--rotate RX RY RZ] [--model FILE]
                                          [--posture NAME.JOINT=RAD ...]
                                          [--objects DIR...] [--placements N] [--no-object-clearance]
-                                         [--mass-scale S]
+                                         [--mass-scale S] [--plan FIELD=VALUE ...]
 
 Each trial uses the category's default scenario (``<category>_default`` in
 ``models/station.scenarios.yaml``) with the object replaced by the instance,
@@ -35,6 +35,7 @@ grasp anchored on its own annotation; ``--placements N`` runs each object at
 N seeded random placements (``random_placement``, seeds 0..N-1);
 ``--mass-scale S`` scales each object's mass and rotational inertia (``PlantSpec.object_mass_scale``;
 e.g. 3: a generated bottle about as heavy as a full real one).
+``--plan close_time=1.6`` sets a field of the planner's ``PlanParams`` for every trial (timing, tolerances).
 ``--no-object-clearance`` plans without the object clearance (the planner as
 it was before session 9), for a before/after in one command::
 
@@ -74,7 +75,9 @@ def sweep_task(spec: dict) -> dict:
     if spec.get("shift") or spec.get("rotate"):
         motion = shifted_motion(motion, category, instance, spec.get("shift") or (0, 0, 0),
                                 spec.get("rotate") or (0, 0, 0), annotations_dir=model_dir)
-    params = PlanParams(object_penetration_tol=None) if spec.get("no_object_clearance") else PlanParams()
+    params = PlanParams(**spec.get("plan", {}))
+    if spec.get("no_object_clearance"):
+        params = dataclasses.replace(params, object_penetration_tol=None)
     r = run_grasp_trial(scenario, motion, params=params)
     return {
         "grasp": r.grasp_success, "functional": r.functional_success, "reason": r.failure_reason,
@@ -117,6 +120,25 @@ def posture_overrides(items: list[str], error) -> dict:
     return out
 
 
+def plan_overrides(items: list[str], error) -> dict:
+    """``["close_time=1.6", ...]`` -> ``{"close_time": 1.6}`` (PlanParams number fields); ``error(message)`` on an
+    unknown field or a value that is not a number."""
+    from catgrasp_drake.planning.records import PlanParams
+
+    fields = {f.name: f for f in dataclasses.fields(PlanParams)}
+    out: dict = {}
+    for item in items:
+        name, _, value = item.partition("=")
+        if name not in fields:
+            error(f"--plan: unknown PlanParams field {name!r} (fields: {', '.join(fields)})")
+        try:
+            number = float(value)
+        except ValueError:
+            error(f"--plan: expected FIELD=NUMBER, got {item!r}")
+        out[name] = int(number) if isinstance(getattr(PlanParams(), name), int) else number
+    return out
+
+
 def _fmt(value, width: int, digits: int, scale: float = 1.0) -> str:
     """``value * scale`` right-aligned, or "-" when it was not measured (None)."""
     return f"{'-':>{width}s}" if value is None else f"{value * scale:{width}.{digits}f}"
@@ -153,6 +175,8 @@ def main(argv=None) -> int:
                          "embedded instances; each in its own category")
     ap.add_argument("--placements", type=int, default=0, metavar="N",
                     help="N seeded random placements per object (seeds 0..N-1) instead of the scenario's pose")
+    ap.add_argument("--plan", nargs="+", action="extend", default=[], metavar="FIELD=VALUE",
+                    help="a PlanParams field set for every trial (e.g. close_time=1.6; numbers only)")
     ap.add_argument("--mass-scale", type=float, default=None, metavar="S",
                     help="the object's mass (and rotational inertia) times S, e.g. 3: a full bottle")
     ap.add_argument("--no-object-clearance", action="store_true",
@@ -174,6 +198,8 @@ def main(argv=None) -> int:
         variant |= {"model": str(args.model), "model_sha256": file_sha256(args.model)}
     if args.no_object_clearance:
         variant["no_object_clearance"] = True
+    if args.plan:
+        variant["plan"] = plan_overrides(args.plan, ap.error)
     if args.mass_scale is not None:
         if not args.mass_scale > 0:
             ap.error(f"--mass-scale: must be > 0, got {args.mass_scale}")

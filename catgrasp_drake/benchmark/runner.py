@@ -58,7 +58,7 @@ from catgrasp_drake.transfer import VIEWS
 
 #: The test split's data-set seed. Fixed; nothing (grasps, kernels, thresholds) is chosen on it.
 TEST_SEED = 7919
-SPLITS = ("test", "ycb", "ais", "smoke", "objects")
+SPLITS = ("test", "ycb", "ais", "stress", "smoke", "objects")
 #: The YCB scans of each category that have the category's functional part.
 YCB_BY_CATEGORY = {"drill": ("ycb_035",), "spray_bottle": ("ycb_022",), "mug": ("ycb_025",)}
 BENCHMARK_METHODS = ("latent", "latent_map", "paper", "nearest", "rigid", "cpd")
@@ -198,6 +198,8 @@ def split_objects(config: BenchmarkConfig) -> list[BenchmarkObject]:
     elif config.split == "ais":
         if "drill" in config.categories:
             out += _ais_drills(Path(config.data_dir) / "ais", config.instances)
+    elif config.split == "stress":
+        out += _stress_objects(Path(config.data_dir) / "stress", config.categories)
     else:  # ycb
         from catgrasp_drake.data.ycb import prepare_ycb, ycb_dir
 
@@ -262,6 +264,28 @@ def _ais_drills(root: Path, only=None) -> list[BenchmarkObject]:
             out.append(BenchmarkObject("ais", "drill", name, str(directory)))
         # else: it falls over by itself (drill_2, drill_3, drill_9: corded drills' narrow handle ends); no
         # grasp from the table can be tested on it
+    return out
+
+
+def _stress_objects(root: Path, categories) -> list[BenchmarkObject]:
+    """Every committed instance of ``categories`` stretched by each of ``data.stretch.STRESS_FAMILIES``, written
+    under ``root/<category>/<instance>_<family>`` (again when the stretch code or the source instance changed)."""
+    from catgrasp_drake.data.dataset import instance_dir, list_instances
+    from catgrasp_drake.data.stretch import STRESS_FAMILIES, stretch_instance
+
+    code = _data_code_version("stretch.py", "dataset.py")
+    out = []
+    for category in categories:
+        for family, stretch in STRESS_FAMILIES.items():
+            for instance in list_instances(category):
+                name = f"{instance}_{family}"
+                directory = root / category / name
+                source = instance_dir(category, instance)
+                stamp = f"{code} {family} {file_sha256(source / f'{instance}.obj')} " \
+                        f"{file_sha256(source / 'annotations.json')}"
+                _prepared(directory, name, stamp,
+                          functools.partial(stretch_instance, category, instance, stretch, directory, name))
+                out.append(BenchmarkObject("stress", category, name, str(directory)))
     return out
 
 
@@ -425,7 +449,7 @@ def trial_specs(config: BenchmarkConfig, model_paths: dict[str, str] | None = No
         # changed import): its files are part of the cache key
         own = ({"object_sha256": hashlib.sha256(b"".join(file_sha256(Path(obj.model_dir) / f).encode() for f in (
             f"{obj.instance}.obj", f"{obj.instance}.sdf", "annotations.json"))).hexdigest()}
-               if obj.split in ("objects", "ycb", "ais") else {})
+               if obj.split in ("objects", "ycb", "ais", "stress") else {})
         for view in config.views:
             for trial in range(placements):
                 for method in config.methods:

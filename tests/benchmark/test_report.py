@@ -320,3 +320,18 @@ def test_the_second_view_section_pairs_each_trial_with_its_single_view():
     assert cells[8].startswith("+40 pp [")
     # no second-view records: no section
     assert "### A second view" not in benchmark_tables([r for r in rs if r["view"] == "single"])
+
+
+def test_a_tuning_split_is_in_the_full_tables_but_never_in_the_summary():
+    def rec(split, instance, trial, ok):
+        return {"split": split, "category": "drill", "instance": instance, "trial": trial, "view": "single",
+                "method": "latent", "physics": "default", "grasp": ok, "functional": ok, "reason": None,
+                "timings": {"total": 2.0}}
+
+    rs = [rec("test", f"drill_t{i:02d}", 0, True) for i in range(4)]
+    rs += [rec("stress", f"drill_{i:02d}_deep", 0, i < 1) for i in range(4)]
+    summary = summary_table(rs)
+    assert "`test`" in summary and "`stress`" not in summary
+    full = benchmark_tables(rs)
+    assert "Split `stress`: the committed instances stretched to real proportions (a TUNING set" in full
+    assert "1/4 (25 %)" in full

@@ -286,3 +286,23 @@ def test_the_ais_split_imports_the_real_drills_once(tmp_path, monkeypatch, ais_d
     monkeypatch.setenv("CATGRASP_AIS_DRILLS", str(tmp_path / "nowhere"))
     with pytest.raises(InputError, match="no drill_<n>.pcd clouds in .*CATGRASP_AIS_DRILLS"):
         split_objects(BenchmarkConfig(split="ais", data_dir=str(tmp_path)))
+
+
+def test_the_stress_split_stretches_every_committed_instance_once(tmp_path):
+    from catgrasp_drake.benchmark.runner import split_objects
+    from catgrasp_drake.data.dataset import list_instances, read_annotations
+    from catgrasp_drake.data.stretch import STRESS_FAMILIES
+
+    config = BenchmarkConfig(split="stress", categories=("mug",), methods=("latent",), data_dir=str(tmp_path))
+    objects = split_objects(config)
+    assert len(objects) == len(STRESS_FAMILIES) * len(list_instances("mug"))
+    assert {o.split for o in objects} == {"stress"} and objects[0].instance == "mug_00_small"
+    deep = [o for o in objects if o.instance == "mug_04_deep"][0]
+    ann = read_annotations(tmp_path / "stress" / "mug" / "mug_04_deep" / "annotations.json")
+    assert ann["stretched_from"] == "mug_04" and ann["stretch"] == list(STRESS_FAMILIES["deep"])
+    mtime = (tmp_path / "stress" / "mug" / "mug_04_deep" / "mug_04_deep.obj").stat().st_mtime_ns
+    assert split_objects(config) == objects  # prepared once: the second call reads what the first wrote
+    assert (tmp_path / "stress" / "mug" / "mug_04_deep" / "mug_04_deep.obj").stat().st_mtime_ns == mtime
+    specs = trial_specs(replace(config, placements=1))
+    assert len(specs) == len(objects) and all("object_sha256" in s for s in specs)
+    assert deep.model_dir == str(tmp_path / "stress" / "mug" / "mug_04_deep")
