@@ -379,7 +379,7 @@ def _cmd_benchmark(args) -> int:
     written = merged_records(kept, records) if args.merge else records
     write_benchmark_records(out, written)
     errors = [r for r in records if r.get("reason") in ("task_error", "worker_died")]
-    print(summary_table(records))
+    print(summary_table(records, tuning=True))
     if errors:
         print(f"{len(errors)} trials ended in an error (reason task_error/worker_died), e.g.: {errors[0]['detail']}")
     merged = f"; {len(written) - len(records)} records of other trials kept from the file" if args.merge else ""

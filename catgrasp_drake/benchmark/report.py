@@ -513,12 +513,13 @@ def benchmark_tables(records: Iterable[dict]) -> str:
     return "\n".join(out).rstrip("\n") + "\n"
 
 
-def summary_table(records: Iterable[dict]) -> str:
+def summary_table(records: Iterable[dict], *, tuning: bool = False) -> str:
     """The README's compact table (the ``summary`` marker): per split and category, single view, default physics,
     the latent method's grasp and functional rates and the baseline with the highest functional rate; held-out
-    splits only (not :data:`TUNING_SPLITS`)."""
+    splits only (not :data:`TUNING_SPLITS`) unless ``tuning`` (the CLI's summary of a tuning run)."""
     records = [r for r in _validated(records, unique=True)
-               if r["physics"] == DEFAULT_PHYSICS and r["view"] == "single" and r["split"] not in TUNING_SPLITS]
+               if r["physics"] == DEFAULT_PHYSICS and r["view"] == "single"
+               and (tuning or r["split"] not in TUNING_SPLITS)]
     rows = []
     for split in _ordered(_field(records, "split"), SPLITS):
         for category in _ordered(_field(_select(records, split=split), "category"), CATEGORIES):

@@ -332,6 +332,7 @@ def test_a_tuning_split_is_in_the_full_tables_but_never_in_the_summary():
     rs += [rec("stress", f"drill_{i:02d}_deep", 0, i < 1) for i in range(4)]
     summary = summary_table(rs)
     assert "`test`" in summary and "`stress`" not in summary
+    assert "| `stress` | drill | 4 |" in summary_table(rs, tuning=True)  # the CLI's summary of a tuning run
     full = benchmark_tables(rs)
     assert "Split `stress`: the committed instances stretched to real proportions (a TUNING set" in full
     assert "1/4 (25 %)" in full
