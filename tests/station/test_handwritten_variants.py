@@ -81,6 +81,12 @@ def test_the_sweep_reads_posture_overrides_from_the_command_line():
     for bad in ("closed.svh_pinky", "svh_pinky=0.8", "closed.svh_pinky=much"):
         with pytest.raises(ValueError, match="NAME.JOINT=RAD"):
             sweep.posture_overrides([bad], error)
+    # --plan FIELD=VALUE: PlanParams fields, integers kept integers
+    assert sweep.plan_overrides(["close_time=1.6", "reach_knots=7"], error) == {"close_time": 1.6, "reach_knots": 7}
+    with pytest.raises(ValueError, match="unknown PlanParams field 'closing_time'"):
+        sweep.plan_overrides(["closing_time=1.6"], error)
+    with pytest.raises(ValueError, match="FIELD=NUMBER"):
+        sweep.plan_overrides(["close_time=slow"], error)
 
 
 @pytest.mark.slow
