@@ -276,13 +276,14 @@ def _stress_objects(root: Path, categories) -> list[BenchmarkObject]:
     code = _data_code_version("stretch.py", "dataset.py")
     out = []
     for category in categories:
+        sources = {instance: " ".join(file_sha256(instance_dir(category, instance) / f)
+                                      for f in (f"{instance}.obj", "annotations.json"))
+                   for instance in list_instances(category)}
         for family, stretch in STRESS_FAMILIES.items():
-            for instance in list_instances(category):
+            for instance, source in sources.items():
                 name = f"{instance}_{family}"
                 directory = root / category / name
-                source = instance_dir(category, instance)
-                stamp = f"{code} {family} {file_sha256(source / f'{instance}.obj')} " \
-                        f"{file_sha256(source / 'annotations.json')}"
+                stamp = f"{code} {family} {source}"
                 _prepared(directory, name, stamp,
                           functools.partial(stretch_instance, category, instance, stretch, directory, name))
                 out.append(BenchmarkObject("stress", category, name, str(directory)))

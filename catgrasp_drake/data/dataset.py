@@ -224,14 +224,20 @@ def write_model_files(directory: Path, name: str, category: str, mesh: trimesh.T
     return WrittenInstance(category, name, directory, mass_kg)
 
 
+def written_solid(mesh: trimesh.Trimesh, density: float) -> trimesh.Trimesh:
+    """``mesh`` at the precision the OBJ is written with (6 decimals), with ``density`` (kg/m^3): the solid whose
+    mass properties go into the SDF, so they match the file."""
+    solid = trimesh.Trimesh(vertices=np.round(mesh.vertices, 6), faces=mesh.faces, process=False)
+    solid.density = float(density)
+    return solid
+
+
 def write_instance(gen: GeneratedInstance, name: str, directory: Path, seed: list[int]) -> WrittenInstance:
     """Write mesh, SDF and annotations of one generated instance into ``directory``."""
     if not gen.mesh.is_watertight:
         raise ModelFileError(f"{name}: generated mesh is not watertight")
     density = gen.density_kg_m3 if gen.density_kg_m3 is not None else DENSITY_KG_M3[gen.category]
-    # mass properties of the mesh at the written precision, so they match the file
-    solid = trimesh.Trimesh(vertices=np.round(gen.mesh.vertices, 6), faces=gen.mesh.faces, process=False)
-    solid.density = density
+    solid = written_solid(gen.mesh, density)
     return write_model_files(directory, name, gen.category, gen.mesh, solid, float(solid.mass), gen.regions,
                              {"seed": seed, "density_kg_m3": density, "params": gen.params})
 

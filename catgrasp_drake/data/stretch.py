@@ -22,9 +22,8 @@ import math
 from pathlib import Path
 
 import numpy as np
-import trimesh
 
-from catgrasp_drake.data.dataset import WrittenInstance, load_annotations, load_mesh, write_model_files
+from catgrasp_drake.data.dataset import WrittenInstance, load_annotations, load_mesh, write_model_files, written_solid
 from catgrasp_drake.errors import InputError
 
 #: The stress split's stretches (sx, sy, sz) of every committed instance, by family name: smaller and larger
@@ -71,9 +70,7 @@ def stretch_instance(category: str, instance: str, stretch, directory: str | Pat
     mesh = load_mesh(category, instance).copy()
     mesh.apply_transform(np.diag([*s, 1.0]))
     name = name or f"{instance}_" + "x".join(f"{v:g}" for v in s)
-    # mass properties of the mesh at the written precision, so they match the file
-    solid = trimesh.Trimesh(vertices=np.round(mesh.vertices, 6), faces=mesh.faces, process=False)
-    solid.density = float(annotations["density_kg_m3"])
+    solid = written_solid(mesh, annotations["density_kg_m3"])
     return write_model_files(Path(directory), name, category, mesh, solid, float(solid.mass),
                              stretched_regions(annotations["regions"], s),
                              {"density_kg_m3": solid.density, "stretched_from": instance,

@@ -297,8 +297,9 @@ def shape_surface_points(shape, spacing: float) -> np.ndarray | None:
     return None
 
 
-def hand_surface_points_H(c: PlanningScene, spacing: float = 0.003) -> np.ndarray:
-    """Points (N, 3) on the hand's collision geometry in its planning posture (``c.q_full``), in frame H (m)."""
+def hand_surface_samples_H(c: PlanningScene, spacing: float = 0.003) -> list[tuple[object, np.ndarray]]:
+    """``[(geometry id, points (n, 3))]``: points every ``spacing`` (m) on each of the hand's collision geometries
+    (those :func:`shape_surface_points` can sample) in its planning posture (``c.q_full``), in frame H (m)."""
     inspector = c.scene_graph.model_inspector()
     query = query_at(c, c.q_full[c.arm_q_idx])
     X_HW = c.frame_H.CalcPoseInWorld(c.plant_context).inverse().GetAsMatrix4()
@@ -307,5 +308,11 @@ def hand_surface_points_H(c: PlanningScene, spacing: float = 0.003) -> np.ndarra
         p_G = shape_surface_points(inspector.GetShape(g), spacing)
         if p_G is not None:
             X_HG = X_HW @ query.GetPoseInWorld(g).GetAsMatrix4()
-            out.append(p_G @ X_HG[:3, :3].T + X_HG[:3, 3])
-    return np.vstack(out) if out else np.zeros((0, 3))
+            out.append((g, p_G @ X_HG[:3, :3].T + X_HG[:3, 3]))
+    return out
+
+
+def hand_surface_points_H(c: PlanningScene, spacing: float = 0.003) -> np.ndarray:
+    """Points (N, 3) on the hand's collision geometry in its planning posture (``c.q_full``), in frame H (m)."""
+    samples = hand_surface_samples_H(c, spacing)
+    return np.vstack([p for _, p in samples]) if samples else np.zeros((0, 3))

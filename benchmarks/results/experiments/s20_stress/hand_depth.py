@@ -24,7 +24,7 @@ sys.path.insert(0, str(ROOT))
 
 from catgrasp_drake.data.dataset import imported_object, list_instances  # noqa: E402
 from catgrasp_drake.planning.model import make_planning_model, object_mesh_path, true_object_field  # noqa: E402
-from catgrasp_drake.planning.scene import planning_scene, query_at, shape_surface_points  # noqa: E402
+from catgrasp_drake.planning.scene import hand_surface_samples_H, planning_scene  # noqa: E402
 from catgrasp_drake.station.handwritten import load_handwritten_motion  # noqa: E402
 from catgrasp_drake.station.scenario import load_scenario, with_instance  # noqa: E402
 
@@ -37,18 +37,9 @@ def hand_points_by_link(scenario, q_pre) -> tuple[np.ndarray, np.ndarray]:
                        pm.scene_graph.GetMyMutableContextFromRoot(ctx), arm=pm.arm, hand=pm.hand,
                        object_instance=None, table=pm.table, q_arm_start=pm.q_arm_start, q_hand=q_pre)
     inspector = c.scene_graph.model_inspector()
-    query = query_at(c, c.q_full[c.arm_q_idx])
-    X_HW = c.frame_H.CalcPoseInWorld(c.plant_context).inverse().GetAsMatrix4()
-    points, links = [], []
-    for g in c.hand_ids:
-        p = shape_surface_points(inspector.GetShape(g), 0.003)
-        if p is None:
-            continue
-        X = X_HW @ query.GetPoseInWorld(g).GetAsMatrix4()
-        points.append(p @ X[:3, :3].T + X[:3, 3])
-        frame = inspector.GetFrameId(g)
-        links += [inspector.GetName(frame).split("::")[-1]] * len(p)
-    return np.vstack(points), np.array(links)
+    samples = hand_surface_samples_H(c)
+    links = [inspector.GetName(inspector.GetFrameId(g)).split("::")[-1] for g, _ in samples]
+    return np.vstack([p for _, p in samples]), np.repeat(links, [len(p) for _, p in samples])
 
 
 def main() -> None:
