@@ -156,7 +156,7 @@ def _category_folder(args):
     if args.category not in (None, cat.name, cat.like):
         raise InputError(f"--objects {args.objects[0]}: a {cat.name!r} category (like {cat.like}), "
                          f"not {args.category!r}")
-    for flag, value in (("--instances", args.instances), ("--canonical", args.canonical)):
+    for flag, value in (("--instances", args.instances), ("--canonical", args.canonical), ("--stretch", args.stretch)):
         if value:
             raise InputError(f"{flag}: a category folder trains on its own meshes and canonical instance")
     return cat
@@ -209,6 +209,13 @@ def _cmd_train(args) -> int:
     how = (f"a robustness search per instance ({args.rounds} rounds x {args.population} candidates x "
            f"{args.perturbations} trials at most)" if args.search else f"{args.samples} sampled motions per instance")
     print(f"training {args.category} on {len(instances)} instances: {how}, seed {args.seed}")
+    if args.stretch:
+        from catgrasp_drake.benchmark.runner import stretched_objects
+
+        stretched = stretched_objects(args.stretch_dir, args.category, instances, args.stretch)
+        print(f"and their {len(stretched)} stretched copies ({', '.join(args.stretch)}) under "
+              f"{Path(args.stretch_dir) / args.category}")
+        args.objects = [*(args.objects or ()), *(directory for _, directory in stretched)]
     if args.objects:
         print(f"and {len(args.objects)} imported objects: {', '.join(str(d) for d in args.objects)}")
     model = train_category(args.category, instances, config, objects=args.objects, progress=_Progress())
@@ -638,6 +645,12 @@ def build_parser() -> argparse.ArgumentParser:
                    help="imported objects (catgrasp import-object) of the category to train on as well; or ONE "
                         "category folder (meshes + category.yaml, docs/import.md): a new category, trained on its "
                         "meshes alone, written to out/categories/<name>/<name>.npz")
+    t.add_argument("--stretch", nargs="+", choices=("small", "large", "thin", "deep"), default=None,
+                   metavar="FAMILY",
+                   help="also train on each training instance stretched as the stress split's FAMILY (small, "
+                        "large, thin, deep; data/stretch.py), written once under --stretch-dir")
+    t.add_argument("--stretch-dir", default="out/benchmark/data/stress",
+                   help="--stretch: where the stretched copies are written (default: the stress split's own)")
     t.add_argument("--samples", type=_int_at_least(1, MAX_SAMPLES), default=12, help="sampled motions per instance")
     t.add_argument("--seed", type=_int_at_least(0, MAX_SEED), default=0)
     t.add_argument("--workers", type=_int_at_least(0, MAX_WORKERS), default=None,

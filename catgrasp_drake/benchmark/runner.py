@@ -267,27 +267,42 @@ def _ais_drills(root: Path, only=None) -> list[BenchmarkObject]:
     return out
 
 
-def _stress_objects(root: Path, categories) -> list[BenchmarkObject]:
-    """Every committed instance of ``categories`` stretched by each of ``data.stretch.STRESS_FAMILIES``, written
-    under ``root/<category>/<instance>_<family>`` (again when the stretch code or the source instance changed)."""
-    from catgrasp_drake.data.dataset import instance_dir, list_instances
+def stretched_objects(root: str | Path, category: str, instances, families) -> list[tuple[str, Path]]:
+    """``instances`` (committed, of ``category``) stretched by each of ``families`` (names of
+    ``data.stretch.STRESS_FAMILIES``), written under ``root/<category>/<instance>_<family>`` once (again when the
+    stretch code or the source instance changed): ``[(name, directory)]``, family by family. The stress split's
+    objects, and ``catgrasp train --stretch``'s."""
+    from catgrasp_drake.data.dataset import instance_dir
     from catgrasp_drake.data.stretch import STRESS_FAMILIES, stretch_instance
 
+    unknown = [f for f in families if f not in STRESS_FAMILIES]
+    if unknown:
+        raise InputError(f"stretch families: unknown {unknown}; known: {', '.join(STRESS_FAMILIES)}")
     code = _data_code_version("stretch.py", "dataset.py")
+    sources = {instance: " ".join(file_sha256(instance_dir(category, instance) / f)
+                                  for f in (f"{instance}.obj", "annotations.json"))
+               for instance in instances}
     out = []
-    for category in categories:
-        sources = {instance: " ".join(file_sha256(instance_dir(category, instance) / f)
-                                      for f in (f"{instance}.obj", "annotations.json"))
-                   for instance in list_instances(category)}
-        for family, stretch in STRESS_FAMILIES.items():
-            for instance, source in sources.items():
-                name = f"{instance}_{family}"
-                directory = root / category / name
-                stamp = f"{code} {family} {source}"
-                _prepared(directory, name, stamp,
-                          functools.partial(stretch_instance, category, instance, stretch, directory, name))
-                out.append(BenchmarkObject("stress", category, name, str(directory)))
+    for family in families:
+        for instance, source in sources.items():
+            name = f"{instance}_{family}"
+            directory = Path(root) / category / name
+            _prepared(directory, name, f"{code} {family} {source}",
+                      functools.partial(stretch_instance, category, instance, STRESS_FAMILIES[family], directory,
+                                        name))
+            out.append((name, directory))
     return out
+
+
+def _stress_objects(root: Path, categories) -> list[BenchmarkObject]:
+    """Every committed instance of ``categories`` stretched by each of ``data.stretch.STRESS_FAMILIES``
+    (:func:`stretched_objects`)."""
+    from catgrasp_drake.data.dataset import list_instances
+    from catgrasp_drake.data.stretch import STRESS_FAMILIES
+
+    return [BenchmarkObject("stress", category, name, str(directory))
+            for category in categories
+            for name, directory in stretched_objects(root, category, list_instances(category), STRESS_FAMILIES)]
 
 
 def _ycb_preparation_version() -> str:
