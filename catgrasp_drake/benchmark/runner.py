@@ -232,26 +232,36 @@ def ais_drills_dir() -> Path:
     return Path(given) if given else Path(__file__).resolve().parents[3] / "shared" / "datasets" / "ais_drills"
 
 
+#: The AIS drills' trigger boxes, pinned (``tools/pin_ais_triggers.py``): the judge of the ``ais`` split does not
+#: move with the drill model under test.
+AIS_TRIGGERS = Path(__file__).resolve().parent / "ais_triggers.json"
+
+
 def _ais_drills(root: Path, only=None) -> list[BenchmarkObject]:
     """The AIS drills that stand on their base, as imported objects under ``root`` (imported again when the
-    import code or the drill model changed); InputError when their folder is absent."""
-    from catgrasp_drake.category_model import CategoryModel
+    import code or the pinned triggers changed); InputError when their folder is absent.
+
+    Each trigger box is the pinned one of :data:`AIS_TRIGGERS` (until session 21 it was transferred by the
+    committed drill model's fit, so a retrained model moved its own judge)."""
+    import json
+
     from catgrasp_drake.data.dataset import read_annotations
     from catgrasp_drake.data.importer import import_object
-    from catgrasp_drake.demo import default_model_path
 
     source = ais_drills_dir()
     clouds = sorted(source.glob("drill_*.pcd"), key=lambda f: (len(f.stem), f.stem))  # drill_2 before drill_10
     if not clouds:
         raise InputError(f"split ais: no drill_<n>.pcd clouds in {source} (the shared data set is not beside the "
                          "repository; set CATGRASP_AIS_DRILLS to their folder)")
-    model_path = Path(default_model_path("drill"))
-    stamp = f"{_data_code_version('importer.py', 'meshes.py', 'dataset.py', 'cloud_io.py')} {file_sha256(model_path)}"
-    drill_model = functools.cache(lambda: CategoryModel.load(model_path))  # loaded if a drill needs importing
+    triggers = json.loads(AIS_TRIGGERS.read_text())["triggers"]
+    stamp = f"{_data_code_version('importer.py', 'meshes.py', 'dataset.py', 'cloud_io.py')} {file_sha256(AIS_TRIGGERS)}"
 
     def import_drill(cloud: Path, directory: Path, name: str) -> None:
-        # the clouds are in the canonical frame already: the identity, stated
-        import_object(cloud, "drill", model=drill_model(), transform="0 0 0 0 0 0", out=directory, name=name)
+        if name not in triggers:
+            raise InputError(f"split ais: no pinned trigger for {name} in {AIS_TRIGGERS}")
+        # the clouds are in the canonical frame already: the identity, stated; the trigger pinned
+        import_object(cloud, "drill", transform="0 0 0 0 0 0", out=directory, name=name,
+                      regions={"trigger": triggers[name]})
 
     out = []
     for cloud in clouds:

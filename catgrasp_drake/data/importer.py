@@ -628,14 +628,17 @@ def import_mesh(mesh: trimesh.Trimesh, category: str, name: str, *, model: Categ
 
 
 def import_object(path, category: str, *, model: CategoryShape | None = None, mass_kg: float | None = None,
-                  region=None, transform=None, out=None, name: str | None = None) -> ImportedObject:
+                  region=None, transform=None, out=None, name: str | None = None,
+                  regions: dict | None = None) -> ImportedObject:
     """Import a mesh or point-cloud file as an instance of ``category`` (module docstring).
 
     ``model``: the category model (``CategoryModel.load("models/trained/<category>.npz")``), needed for
     the automatic alignment and the region transfer; ``transform``: a stated alignment, ``"rx ry rz x y z"``
     (deg, m; canonical <- input) or a 4x4; ``region``: ``(name, (x, y, z))``, a point of the functional part
     in the file's frame (m); ``mass_kg``: else the category's density times the volume; ``out``: the
-    directory (default ``out/objects/<category>/<name>``); ``name``: default from the file name.
+    directory (default ``out/objects/<category>/<name>``); ``name``: default from the file name; ``regions``:
+    annotated boxes (``{name: {"center", "half_extents", ...}}``, m) in the frame ``transform`` maps from, given
+    instead of transferred (the benchmark's pinned AIS triggers).
     """
     if category not in CATEGORIES:
         raise InputError(f"unknown category {category!r}; known: {', '.join(CATEGORIES)}")
@@ -650,4 +653,5 @@ def import_object(path, category: str, *, model: CategoryShape | None = None, ma
         mesh, observed = f.mesh, None
         source["faces"] = int(len(f.mesh.faces))
     return import_mesh(mesh, category, name, model=model, transform=transform, mass_kg=mass_kg,
-                       region_point=region, out=out, source=source, observed=observed, what=str(f.path))
+                       region_point=region, regions=regions, out=out, source=source, observed=observed,
+                       what=str(f.path))

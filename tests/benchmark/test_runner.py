@@ -258,8 +258,8 @@ def test_benchmark_merge_rewrites_only_the_rerun_trials(tmp_path, monkeypatch):
 
 
 def test_the_ais_split_imports_the_real_drills_once(tmp_path, monkeypatch, ais_drill_paths):
-    """The split 'ais': each real drill cloud imported (its own normals, the stated identity alignment, a
-    transferred trigger), prepared once and kept while the import code and the drill model are the same."""
+    """The split 'ais': each real drill cloud imported (its own normals, the stated identity alignment, the
+    pinned trigger), prepared once and kept while the import code and the pinned triggers are the same."""
     from catgrasp_drake.benchmark.runner import split_objects
 
     cfg = BenchmarkConfig(split="ais", instances=("ais_drill_4",), data_dir=str(tmp_path), placements=2,
@@ -271,7 +271,11 @@ def test_the_ais_split_imports_the_real_drills_once(tmp_path, monkeypatch, ais_d
     assert rec["source"]["reconstruction"]["normals"] == "the cloud's own"
     # the stated identity, levelled on the reconstructed base by less than a degree
     assert not rec["transform"]["automatic"] and max(map(abs, rec["transform"]["rpy_deg"])) < 1.0
-    assert "trigger" in ann["regions"]
+    # the pinned trigger (tools/pin_ais_triggers.py), not the drill model's transfer: the box sessions 18-20 judged
+    # ais_drill_4 with, levelled and cut as then
+    assert rec["region_source"] == "given"
+    np.testing.assert_allclose(ann["regions"]["trigger"]["center"], [0.001071, 0.020419, 0.147188], atol=2e-6)
+    np.testing.assert_allclose(ann["regions"]["trigger"]["half_extents"], [0.009758, 0.010256, 0.023597])
     assert 0.18 < ann["bbox_max"][2] < 0.24  # drill_4 stands 0.21 m tall (the cloud's own height)
     sdf = tmp_path / "ais" / "drill" / "ais_drill_4" / "ais_drill_4.sdf"
     mtime = sdf.stat().st_mtime_ns
