@@ -43,7 +43,7 @@ DEFAULT_PHYSICS = "default"
 #: Display orders (values not listed follow, sorted by name).
 SPLITS = ("test", "ycb", "ais", "stress")
 SPLIT_TITLES = {"test": "held-out generated instances", "ycb": "real scans (YCB)",
-                "ais": "real drills (AIS clouds; trigger transferred by the fit)",
+                "ais": "real drills (AIS clouds; trigger pinned, session 21: the session-7 model's transfer)",
                 "stress": "the committed instances stretched to real proportions (a TUNING set, not a measure)",
                 "smoke": "smoke run"}
 #: Splits of tuned-on objects: in the full tables, never in the README's summary of held-out results.
