@@ -209,16 +209,17 @@ def _cmd_train(args) -> int:
     how = (f"a robustness search per instance ({args.rounds} rounds x {args.population} candidates x "
            f"{args.perturbations} trials at most)" if args.search else f"{args.samples} sampled motions per instance")
     print(f"training {args.category} on {len(instances)} instances: {how}, seed {args.seed}")
+    objects = list(args.objects or ())
+    if objects:
+        print(f"and {len(objects)} imported objects: {', '.join(str(d) for d in objects)}")
     if args.stretch:
         from catgrasp_drake.benchmark.runner import stretched_objects
 
         stretched = stretched_objects(args.stretch_dir, args.category, instances, args.stretch)
         print(f"and their {len(stretched)} stretched copies ({', '.join(args.stretch)}) under "
               f"{Path(args.stretch_dir) / args.category}")
-        args.objects = [*(args.objects or ()), *(directory for _, directory in stretched)]
-    if args.objects:
-        print(f"and {len(args.objects)} imported objects: {', '.join(str(d) for d in args.objects)}")
-    model = train_category(args.category, instances, config, objects=args.objects, progress=_Progress())
+        objects += [directory for _, directory in stretched]
+    model = train_category(args.category, instances, config, objects=objects, progress=_Progress())
     out = Path(args.out or f"models/trained/{args.category}.npz")
     model.save(out)
     _print_training(model)
