@@ -470,6 +470,12 @@ def _cmd_import_object(args) -> int:
     margin_mm = 1000 * rec["support_margin_m"]
     print(f"  stands     {'yes' if rec['stands'] else 'NO'}: its centre of mass is {abs(margin_mm):.0f} mm "
           f"{'inside' if rec['stands'] else 'outside'} its base")
+    try:
+        fit = _handwritten_fit(imported.category, imported.name, imported.directory)
+        print(f"  hand fit   the {imported.category} hand-written grasp on its region: {fit.summary()}")
+    except InputError as e:  # e.g. no region the category's grasp is anchored on
+        fit = None
+        print(f"  hand fit   not checked: {e}")
     t0 = time.perf_counter()
     from catgrasp_drake.viz.sheets import import_sheet
 
@@ -484,8 +490,21 @@ def _cmd_import_object(args) -> int:
     if imported.confidence is not None and imported.confidence < LOW_CONFIDENCE:
         print(f"warning: the fit's confidence {imported.confidence:.2f} is below {LOW_CONFIDENCE}: check {png} "
               "and pass --transform if the alignment is wrong", file=sys.stderr)
+    if fit is not None and not fit.plannable:
+        print("warning: the category's grasp does not fit it (the preshaped hand lies inside it wherever the planner "
+              "may move it): expect collision_before_closing", file=sys.stderr)
     print(f"use it: catgrasp demo --object {imported.directory}" + (f" --model {args.model}" if args.model else ""))
     return 0
+
+
+def _handwritten_fit(category: str, name: str, directory):
+    """``planning.fit.hand_fit`` of the category's hand-written grasp anchored on an imported object's region."""
+    from catgrasp_drake.planning.fit import hand_fit
+    from catgrasp_drake.station.handwritten import load_handwritten_motion
+    from catgrasp_drake.station.scenario import load_scenario, with_instance
+
+    scenario = with_instance(load_scenario(f"{category}_default"), name, category=category, model_dir=directory)
+    return hand_fit(scenario, load_handwritten_motion(category, name, annotations_dir=directory))
 
 
 def _cmd_film(args) -> int:

@@ -1,0 +1,80 @@
+"""``planning.fit.hand_fit``: the preshaped hand against an object's mesh, with known answers from the planner."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from catgrasp_drake.data.stretch import STRESS_FAMILIES, stretch_instance
+from catgrasp_drake.errors import InputError
+from catgrasp_drake.planning.fit import hand_fit
+from catgrasp_drake.station.handwritten import load_handwritten_motion
+from catgrasp_drake.station.scenario import load_scenario, with_instance
+from catgrasp_drake.trial import plan_for, trial_diagram
+
+
+def _fit(category, name, directory=None):
+    scenario = with_instance(load_scenario(f"{category}_default"), name, category=category, model_dir=directory)
+    motion = load_handwritten_motion(category, name, annotations_dir=directory)
+    return scenario, motion, hand_fit(scenario, motion)
+
+
+@pytest.fixture(scope="module")
+def deep_bottles(tmp_path_factory):
+    """spray_bottle_00 and _02 stretched 1.3x along y (the stress split's deep family)."""
+    root = tmp_path_factory.mktemp("deep")
+    return {name: stretch_instance("spray_bottle", name, STRESS_FAMILIES["deep"], root / name, f"{name}_deep").directory
+            for name in ("spray_bottle_00", "spray_bottle_02")}
+
+
+def test_the_committed_drill_grasp_fits_its_drill_as_written():
+    _, _, fit = _fit("drill", "drill_00")  # 13/13 committed drills lifted by it (docs/station.md)
+    assert fit.plannable and not fit.shift_m.any()
+    assert fit.depth_m < 0.0  # clear of the drill everywhere
+    assert {"svh_thumb_middle_link", "svh_index_distal_link", "svh_base_link"} <= set(fit.link_depths_m)
+    assert "executed as written" in fit.summary()
+
+
+def test_a_deep_bottle_moves_the_grasp_as_the_planner_does(deep_bottles):
+    scenario, motion, fit = _fit("spray_bottle", "spray_bottle_00_deep", deep_bottles["spray_bottle_00"])
+    _, _, plain = _fit("spray_bottle", "spray_bottle_00")
+    assert fit.depth_m > plain.depth_m + 0.005  # the deeper body meets the tucked thumb
+    assert fit.deepest_links(1)[0][0].startswith(("svh_thumb", "svh_pinky"))
+    assert fit.plannable and 0.004 < np.linalg.norm(fit.shift_m) < 0.020
+    plan = plan_for(trial_diagram(scenario), motion.in_world(scenario.X_WO()))
+    # the planner's own move of the grasp (world frame) has the same length
+    assert np.linalg.norm(plan.object_shift) == pytest.approx(np.linalg.norm(fit.shift_m), abs=2e-4)
+
+
+def test_a_hand_no_move_clears_is_refused_as_the_planner_refuses_it(deep_bottles):
+    scenario, motion, fit = _fit("spray_bottle", "spray_bottle_02_deep", deep_bottles["spray_bottle_02"])
+    assert not fit.plannable and fit.depth_m > 0.015
+    assert "refuses the grasp" in fit.summary()
+    plan = plan_for(trial_diagram(scenario), motion.in_world(scenario.X_WO()))
+    assert not plan.ok and plan.status.startswith("collision: grasp")
+
+
+def test_a_primitive_object_or_a_world_frame_motion_is_refused():
+    scenario = load_scenario("cylinder_test")
+    motion = load_handwritten_motion("drill", "drill_00")
+    with pytest.raises(InputError, match="no object mesh"):
+        hand_fit(scenario, motion)
+    drill = with_instance(load_scenario("drill_default"), "drill_00")
+    with pytest.raises(InputError, match="object frame"):
+        hand_fit(drill, motion.in_world(drill.X_WO()))
+
+
+def test_import_object_reports_the_fit_and_warns_when_the_grasp_cannot_fit(deep_bottles, tmp_path, capsys):
+    from catgrasp_drake.cli import main
+
+    directory = deep_bottles["spray_bottle_02"]  # in the canonical frame: the stated trigger is its annotated one
+    trigger = json.loads((directory / "annotations.json").read_text())["regions"]["trigger"]["center"]
+    argv = ["import-object", str(directory / "spray_bottle_02_deep.obj"), "--category", "spray_bottle",
+            "--region", "trigger", *map(str, trigger), "--out", str(tmp_path / "obj")]
+    assert main(argv) == 0
+    out, err = capsys.readouterr()
+    line = next(ln for ln in out.splitlines() if ln.strip().startswith("hand fit"))
+    assert "inside the object" in line and "refuses the grasp" in line
+    assert "expect collision_before_closing" in err
