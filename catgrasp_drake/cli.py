@@ -471,10 +471,10 @@ def _cmd_import_object(args) -> int:
     print(f"  stands     {'yes' if rec['stands'] else 'NO'}: its centre of mass is {abs(margin_mm):.0f} mm "
           f"{'inside' if rec['stands'] else 'outside'} its base")
     try:
-        fit = _handwritten_fit(imported.category, imported.name, imported.directory)
-        print(f"  hand fit   the {imported.category} hand-written grasp on its region: {fit.summary()}")
+        hand = _handwritten_fit(imported.category, imported.name, imported.directory)
+        print(f"  hand fit   the {imported.category} hand-written grasp on its region: {hand.summary()}")
     except InputError as e:  # e.g. no region the category's grasp is anchored on
-        fit = None
+        hand = None
         print(f"  hand fit   not checked: {e}")
     t0 = time.perf_counter()
     from catgrasp_drake.viz.sheets import import_sheet
@@ -490,7 +490,7 @@ def _cmd_import_object(args) -> int:
     if imported.confidence is not None and imported.confidence < LOW_CONFIDENCE:
         print(f"warning: the fit's confidence {imported.confidence:.2f} is below {LOW_CONFIDENCE}: check {png} "
               "and pass --transform if the alignment is wrong", file=sys.stderr)
-    if fit is not None and not fit.plannable:
+    if hand is not None and not hand.plannable:
         print("warning: the category's grasp does not fit it (the preshaped hand lies inside it wherever the planner "
               "may move it): expect collision_before_closing", file=sys.stderr)
     print(f"use it: catgrasp demo --object {imported.directory}" + (f" --model {args.model}" if args.model else ""))
