@@ -28,6 +28,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from catgrasp_drake.core.fileio import atomic_write_text  # noqa: E402
 from catgrasp_drake.data.dataset import imported_object, list_instances  # noqa: E402
 from catgrasp_drake.planning.fit import hand_fit  # noqa: E402
 from catgrasp_drake.station.handwritten import load_handwritten_motion  # noqa: E402
@@ -65,7 +66,7 @@ def main(argv=None) -> int:
           f"{refused} refused")
     if args.json:
         args.json.parent.mkdir(parents=True, exist_ok=True)
-        args.json.write_text(json.dumps(rows, indent=1) + "\n")
+        atomic_write_text(args.json, json.dumps(rows, indent=1) + "\n")
     return 0
 
 
