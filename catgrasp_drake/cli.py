@@ -471,7 +471,10 @@ def _cmd_import_object(args) -> int:
     print(f"  stands     {'yes' if rec['stands'] else 'NO'}: its centre of mass is {abs(margin_mm):.0f} mm "
           f"{'inside' if rec['stands'] else 'outside'} its base")
     try:
-        hand = _handwritten_fit(imported.category, imported.name, imported.directory)
+        from catgrasp_drake.planning.fit import hand_fit
+        from catgrasp_drake.station.handwritten import handwritten_trial
+
+        hand = hand_fit(*handwritten_trial(object_dir=imported.directory))
         print(f"  hand fit   the {imported.category} hand-written grasp on its region: {hand.summary()}")
     except InputError as e:  # e.g. no region the category's grasp is anchored on
         hand = None
@@ -495,16 +498,6 @@ def _cmd_import_object(args) -> int:
               "may move it): expect collision_before_closing", file=sys.stderr)
     print(f"use it: catgrasp demo --object {imported.directory}" + (f" --model {args.model}" if args.model else ""))
     return 0
-
-
-def _handwritten_fit(category: str, name: str, directory):
-    """``planning.fit.hand_fit`` of the category's hand-written grasp anchored on an imported object's region."""
-    from catgrasp_drake.planning.fit import hand_fit
-    from catgrasp_drake.station.handwritten import load_handwritten_motion
-    from catgrasp_drake.station.scenario import load_scenario, with_instance
-
-    scenario = with_instance(load_scenario(f"{category}_default"), name, category=category, model_dir=directory)
-    return hand_fit(scenario, load_handwritten_motion(category, name, annotations_dir=directory))
 
 
 def _cmd_film(args) -> int:

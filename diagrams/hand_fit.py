@@ -6,8 +6,8 @@
 For each committed instance of ``--categories`` and each imported object
 (``catgrasp import-object``, the stress split's stretched copies under
 ``out/benchmark/data/stress/<category>/``, the YCB scans), the category's
-hand-written grasp is anchored on the object's own annotated region (as
-``diagrams/handwritten_sweep.py`` does) and its hand, in ``--posture``, is
+hand-written grasp is anchored on the object's own annotated region
+(``station.handwritten.handwritten_trial``, as ``catgrasp film`` does) and its hand, in ``--posture``, is
 checked against the object's mesh (``catgrasp_drake.planning.fit.hand_fit``:
 the signed-distance grid of the planner's object clearance). Printed per object:
 the depth of the hand's deepest point inside the object (mm; negative = clear),
@@ -29,10 +29,9 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from catgrasp_drake.core.fileio import atomic_write_text  # noqa: E402
-from catgrasp_drake.data.dataset import imported_object, list_instances  # noqa: E402
+from catgrasp_drake.data.dataset import list_instances  # noqa: E402
 from catgrasp_drake.planning.fit import hand_fit  # noqa: E402
-from catgrasp_drake.station.handwritten import load_handwritten_motion  # noqa: E402
-from catgrasp_drake.station.scenario import load_scenario, with_instance  # noqa: E402
+from catgrasp_drake.station.handwritten import handwritten_trial  # noqa: E402
 
 
 def main(argv=None) -> int:
@@ -46,13 +45,13 @@ def main(argv=None) -> int:
     categories = args.categories if args.categories is not None else ([] if args.objects else
                                                                       ["drill", "spray_bottle", "mug"])
     items = [(c, name, None) for c in categories for name in list_instances(c)]
-    items += [(*imported_object(d), d) for d in args.objects]  # (category, instance, directory)
+    items += [(None, None, d) for d in args.objects]  # an imported object: its directory says the rest
     print(f"{'object':26s} {'depth (mm)':>10s}  {'deepest links (mm)':48s} planner")
     rows = []
     for category, name, directory in items:
-        scenario = with_instance(load_scenario(f"{category}_default"), name, category=category, model_dir=directory)
-        fit = hand_fit(scenario, load_handwritten_motion(category, name, annotations_dir=directory),
-                       posture=args.posture)
+        scenario, motion = handwritten_trial(category, name, object_dir=directory)
+        category, name = scenario.object.category, scenario.object.instance
+        fit = hand_fit(scenario, motion, posture=args.posture)
         links = ", ".join(f"{k.removeprefix('svh_')} {1000 * d:.1f}" for k, d in fit.deepest_links())
         shift_mm = 1000 * float(np.linalg.norm(fit.shift_m))
         action = "refused" if not fit.plannable else (f"moved {shift_mm:.1f} mm" if shift_mm > 0 else "as written")

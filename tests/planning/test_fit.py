@@ -10,14 +10,13 @@ import pytest
 from catgrasp_drake.data.stretch import STRESS_FAMILIES, stretch_instance
 from catgrasp_drake.errors import InputError
 from catgrasp_drake.planning.fit import hand_fit
-from catgrasp_drake.station.handwritten import load_handwritten_motion
+from catgrasp_drake.station.handwritten import handwritten_trial, load_handwritten_motion
 from catgrasp_drake.station.scenario import load_scenario, with_instance
 from catgrasp_drake.trial import plan_for, trial_diagram
 
 
 def _fit(category, name, directory=None):
-    scenario = with_instance(load_scenario(f"{category}_default"), name, category=category, model_dir=directory)
-    motion = load_handwritten_motion(category, name, annotations_dir=directory)
+    scenario, motion = handwritten_trial(category, name, object_dir=directory)
     return scenario, motion, hand_fit(scenario, motion)
 
 
