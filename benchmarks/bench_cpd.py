@@ -182,6 +182,8 @@ def methods_for(n, args):
     # the same EM steps, extrapolated (SQUAREM): iterations = EM steps, to the same stopping rule
     rows.append(("catgrasp new default + acceleration='squarem', own stop",
                  lambda Y, X: run_ours(Y, X, OWN_MAX_ITER, "auto", "truncated", own, "squarem"), args.repeat, True))
+    rows.append(("catgrasp e_step='fast' + acceleration='squarem', own stop",
+                 lambda Y, X: run_ours(Y, X, OWN_MAX_ITER, "auto", "fast", own, "squarem"), args.repeat, True))
     if n <= args.max_reference_size:
         rows.append((f"pycpd {version('pycpd') or '(not installed)'}, 100 it", lambda Y, X: run_pycpd(Y, X, it), 1,
                      False))

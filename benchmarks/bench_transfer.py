@@ -1,4 +1,4 @@
-"""Perception-to-motion latency of the grasp transfer diagram (depth image in -> grasp motion out), old vs new.
+"""Perception-to-motion latency of the transfer diagram (depth image in -> grasp motion out), by estimator setting.
 
 For each held-out instance of the committed category model and each seeded
 placement, the transfer diagram (single view, unknown yaw: 8 starts) is built
@@ -25,6 +25,11 @@ Settings, interleaved placement by placement so that both see the same load:
   the 4 best of 8 starts kept after 2 iterations, float32 search E-step,
   visibility updates skipped while the model moved < 2 mm).
 
+* ``fast`` (``--settings old new fast``; session 23): what the 50 ms goal costs -- one shape
+  hypothesis (no posterior: the ``latent_map`` estimate), the yaw search's starts 8 iterations
+  instead of 12 and the refine at most 12 instead of 40 (:data:`FAST`). Chosen on the committed
+  held-out instances this script measures; not a default.
+
 Also per setting: the estimate's accuracy against the true object (its mesh
 surface, 4000 seeded samples, at its true pose): Chamfer distance, the error
 on the part the camera does not see (true points > 1 cm from the observed
@@ -32,7 +37,7 @@ cloud) and the rotation error of X_WO (deg). The cloud stage's code and the
 regressor's single-threaded BLAS are the same in both settings (the cloud is
 bit-identical to the earlier code, which took ~20 ms: see the report).
 
-Run:  python benchmarks/bench_transfer.py [--category drill] [--seeds 5]
+Run:  python benchmarks/bench_transfer.py [--category drill] [--seeds 5] [--settings old new fast]
 """
 
 from __future__ import annotations
@@ -56,7 +61,9 @@ from catgrasp_drake.demo import default_model_path  # noqa: E402
 from catgrasp_drake.station.scenario import load_scenario, random_placement, with_instance  # noqa: E402
 from catgrasp_drake.transfer import make_transfer_diagram  # noqa: E402
 
-SETTINGS = {"old": dict(voxel_size=None, **LEGACY_SEARCH), "new": {}}
+#: One shape hypothesis, a shorter yaw search and refine: the 50 ms setting (module docstring).
+FAST = {"hypotheses": 1, "search_iter": 8, "max_iter": 12}
+SETTINGS = {"old": dict(voxel_size=None, **LEGACY_SEARCH), "new": {}, "fast": FAST}
 NAMES = ("render (sensor)", "cloud", "estimate", "  of which core", "regress", "LATENCY", "share outside core",
          "IK plan")
 
@@ -109,44 +116,48 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--category", default="drill")
     ap.add_argument("--seeds", type=int, default=5, help="placements per held-out instance")
+    ap.add_argument("--settings", nargs="+", default=["old", "new"], choices=list(SETTINGS),
+                    help="estimator settings timed side by side (interleaved placement by placement)")
     args = ap.parse_args(argv)
+    settings = {k: SETTINGS[k] for k in args.settings}
     model = CategoryModel.load(default_model_path(args.category), category=args.category)
     held_out = [n for n in list_instances(args.category) if n not in model.instances]
-    rows = {k: [] for k in SETTINGS}
-    accs = {k: [] for k in SETTINGS}
+    rows = {k: [] for k in settings}
+    accs = {k: [] for k in settings}
     print(f"{os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.2f} at the start")
     for instance in held_out:
         base = with_instance(load_scenario(f"{args.category}_default"), instance)
         for seed in range(args.seeds):
             scenario = random_placement(base, seed)
             truth = true_surface_W(scenario)
-            order = list(SETTINGS) if seed % 2 == 0 else list(SETTINGS)[::-1]
+            order = list(settings) if seed % 2 == 0 else list(settings)[::-1]
             for name in order:
-                times, acc, n_obs, n_fit, ok = run_once(scenario, model, SETTINGS[name], truth)
+                times, acc, n_obs, n_fit, ok = run_once(scenario, model, settings[name], truth)
                 rows[name].append(times)
                 accs[name].append(acc)
                 print(f"  {instance} seed {seed} {name}: {n_obs} points ({n_fit} fitted), "
                       f"latency {1000 * times[5]:.0f} ms (core {1000 * times[3]:.0f} ms), "
                       f"plan {1000 * times[7]:.0f} ms ({'ok' if ok else 'failed'}), "
                       f"unseen {acc[1]:.2f} mm, rotation {acc[2]:.1f} deg")
-    print(f"\n{args.category}: {len(rows['new'])} runs per setting ({len(held_out)} held-out instances x {args.seeds} "
+    n_runs = len(next(iter(rows.values())))
+    print(f"\n{args.category}: {n_runs} runs per setting ({len(held_out)} held-out instances x {args.seeds} "
           f"placements), single view, unknown yaw (8 starts); load average {os.getloadavg()[0]:.2f} at the end")
-    print(f"| {'stage':<20s} | {'old median':>11s} | {'old max':>10s} | {'new median':>11s} | {'new max':>10s} |")
-    print(f"|{'-' * 22}|{'-' * 13}|{'-' * 12}|{'-' * 13}|{'-' * 12}|")
+    print("| stage | " + " | ".join(f"{s} median | {s} max" for s in settings) + " |")
+    print("|---|" + "---|---|" * len(settings))
     A = {k: np.array(v) for k, v in rows.items()}
     for k, name in enumerate(NAMES):
         cells = []
-        for s in SETTINGS:
+        for s in settings:
             col = A[s][:, k]
             if name.startswith("share"):
-                cells += [f"{100 * np.median(col):10.1f}%", f"{100 * col.max():9.1f}%"]
+                cells += [f"{100 * np.median(col):.1f}%", f"{100 * col.max():.1f}%"]
             else:
-                cells += [f"{1000 * np.median(col):8.1f} ms", f"{1000 * col.max():7.1f} ms"]
-        print(f"| {name:<20s} | {cells[0]:>11s} | {cells[1]:>10s} | {cells[2]:>11s} | {cells[3]:>10s} |")
+                cells += [f"{1000 * np.median(col):.1f} ms", f"{1000 * col.max():.1f} ms"]
+        print(f"| {name.strip()} | " + " | ".join(cells) + " |")
     print("\nAccuracy against the true object (mean over runs; rotation: median and max)")
     print("| setting | Chamfer (mm) | unseen part (mm) | rotation error median (deg) | max (deg) |")
     print("|---|---|---|---|---|")
-    for s in SETTINGS:
+    for s in settings:
         a = np.array(accs[s])
         print(f"| {s} | {a[:, 0].mean():.2f} | {a[:, 1].mean():.2f} | {np.median(a[:, 2]):.1f} | {a[:, 2].max():.1f} |")
     return 0
