@@ -60,8 +60,10 @@ def predict_grasp(method: str, model: CategoryModel, observed_W, X_WT, *, camera
     if method not in METHODS:
         raise InputError(f"unknown method {method!r}; known: {', '.join(METHODS)}")
     t0 = time.perf_counter()
-    space = rigid_space(model.space) if ESTIMATORS[method].rigid else model.space
-    est = estimate_on_table(space, observed_W, X_WT, camera_W=camera_W, yaw_candidates=yaw_candidates)
+    setup = ESTIMATORS[method]
+    space = rigid_space(model.space) if setup.rigid else model.space
+    est = estimate_on_table(space, observed_W, X_WT, camera_W=camera_W, yaw_candidates=yaw_candidates,
+                            **dict(setup.inference))
     timing = {"fit": time.perf_counter() - t0}
     if not est.ok:
         return Prediction(method, None, est, timing | {"total": time.perf_counter() - t0}, est.status)

@@ -736,7 +736,8 @@ def build_parser() -> argparse.ArgumentParser:
                    choices=["drill", "spray_bottle", "mug"])
     # (literals: the CLI imports no stack at parse time; a test checks them against BENCHMARK_METHODS, METHODS)
     b.add_argument("--methods", nargs="+", default=["latent", "latent_map", "paper", "nearest", "rigid", "cpd"],
-                   choices=["latent", "latent_map", "paper", "nearest", "rigid", "cpd", "true_object"])
+                   choices=["latent", "latent_map", "latent_fast", "paper", "nearest", "rigid", "cpd",
+                            "true_object"])
     b.add_argument("--views", nargs="+", default=["single"], choices=["single", "active", "two", "full"],
                    help="single (the measure), active (a second camera's view when the first leaves the yaw "
                         "open), two (always both), full (4 cameras)")

@@ -252,8 +252,7 @@ def make_transfer_diagram(scenario: Scenario, model: CategoryModel, meshcat: Mes
     builder = DiagramBuilder()
     h = add_station(builder, scenario, meshcat)
     space = rigid_space(model.space) if setup.rigid else model.space
-    if setup.hypotheses > 1:
-        inference_kwargs = {"hypotheses": setup.hypotheses} | inference_kwargs
+    inference_kwargs = setup.inference_kwargs | inference_kwargs  # (the caller's options win)
     estimator = builder.AddNamedSystem("shape_estimator", LatentShapeEstimator(
         space, scenario.table.pose.matrix(), yaw_candidates=yaw_candidates,
         second_view=SECOND_VIEW_POLICY.get(view, "never"), **inference_kwargs))

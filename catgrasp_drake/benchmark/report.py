@@ -50,11 +50,12 @@ SPLIT_TITLES = {"test": "held-out generated instances", "ycb": "real scans (YCB)
 TUNING_SPLITS = ("stress",)
 CATEGORIES = ("drill", "spray_bottle", "mug")
 VIEWS = ("single", "active", "two", "full")
-METHODS = ("latent", "latent_map", "paper", "nearest", "rigid", "cpd", "true_object")
-METHOD_LABELS = {"true_object": "true-object planner (ablation)", "latent_map": "latent, MAP fit only (ablation)"}
+METHODS = ("latent", "latent_map", "latent_fast", "paper", "nearest", "rigid", "cpd", "true_object")
+METHOD_LABELS = {"true_object": "true-object planner (ablation)", "latent_map": "latent, MAP fit only (ablation)",
+                 "latent_fast": "latent, fast fit (ablation)"}
 #: Methods that are not baselines (privileged information, or the method itself with a part switched
 #: off): never the "best baseline" of the summary.
-ABLATIONS = ("true_object", "latent_map")
+ABLATIONS = ("true_object", "latent_map", "latent_fast")
 #: Categories pooled in the overall tables (stratified bootstrap by category).
 POOLED = ("drill", "spray_bottle")
 MARKERS = ("summary", "full")

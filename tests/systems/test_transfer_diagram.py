@@ -46,6 +46,27 @@ def test_diagram_runs_as_a_plain_simulation_without_meshcat(drill_model):
     assert td.estimator.GetOutputPort("estimate").Eval(td.estimator.GetMyContextFromRoot(context)) is est
 
 
+def test_fast_method_fits_one_shape_in_a_short_refine_and_finds_the_same_pose(drill_model):
+    """``latent_fast`` (issue 17): one hypothesis, the refine capped at FAST_ESTIMATE's 12 EM iterations,
+    and on a held-out drill the same pose as the latent method's full fit (within 1 cm and 5 deg)."""
+    from catgrasp_drake.prediction import FAST_ESTIMATE
+
+    scenario = random_placement(with_instance(load_scenario("drill_default"), "drill_12"), 1)
+    estimates = {}
+    for method in ("latent", "latent_fast"):
+        td = make_transfer_diagram(scenario, drill_model, method=method)
+        context = td.diagram.CreateDefaultContext()
+        estimates[method] = td.estimator.estimate_now(td.estimator.GetMyMutableContextFromRoot(context))
+    full, fast = estimates["latent"], estimates["latent_fast"]
+    assert full.ok and fast.ok
+    assert fast.hypotheses == () and fast.result.iterations <= FAST_ESTIMATE["max_iter"] == 12
+    assert np.linalg.norm(fast.X_WO[:3, 3] - full.X_WO[:3, 3]) < 0.01
+    cos = (np.trace(fast.X_WO[:3, :3].T @ full.X_WO[:3, :3]) - 1.0) / 2.0
+    assert np.degrees(np.arccos(np.clip(cos, -1.0, 1.0))) < 5.0
+    X_true = scenario.X_WO()
+    assert np.linalg.norm(fast.X_WO[:3, 3] - X_true[:3, 3]) < 0.03
+
+
 def test_demo_grasps_a_held_out_drill_functionally_from_one_view(tmp_path, capsys):
     _run_demo(tmp_path, capsys)
     record = json.loads((tmp_path / "result.json").read_text())
