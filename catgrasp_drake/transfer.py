@@ -21,7 +21,6 @@ each stage, and judges the outcome with the station's judge.
 from __future__ import annotations
 
 import dataclasses
-import functools
 import time
 from dataclasses import asdict, dataclass, field
 
@@ -292,7 +291,7 @@ def make_transfer_diagram(scenario: Scenario, model: CategoryModel, meshcat: Mes
     else:
         planning = make_planning_model(scenario)
         generator = builder.AddNamedSystem("grasp_trajectory", MotionPlanner(
-            h.plant, h.arm, h.hand, planning, obstacle_model=functools.partial(make_planning_model, scenario),
+            h.plant, h.arm, h.hand, planning, obstacle_model=planning.with_obstacle,
             params=params, min_confidence=min_confidence))
         builder.Connect(estimator.GetOutputPort("completed_cloud_W"), generator.GetInputPort("object_cloud_W"))
     builder.Connect(regressor.GetOutputPort("grasp_motion_W"), generator.GetInputPort("grasp_motion_W"))

@@ -403,13 +403,14 @@ def timeline_and_knots(q_arm_start: np.ndarray, postures: tuple[np.ndarray, np.n
 def plan_grasp(plant: MultibodyPlant, plant_context, scene_graph, sg_context, *, arm: ModelInstanceIndex,
                hand: ModelInstanceIndex, object_instance: ModelInstanceIndex | None, table: ModelInstanceIndex,
                motion_W: GraspMotion, q_arm_start, params: PlanParams = PlanParams(),
-               object_surface: ObjectSurface | None = None) -> GraspPlan:
+               object_surface: ObjectSurface | None = None, object_geometry_ids=()) -> GraspPlan:
     """Plan the joint trajectories executing ``motion_W`` (poses in the WORLD frame).
 
     ``plant_context``/``sg_context`` must be a SCRATCH context of the diagram
     holding ``plant`` and ``scene_graph`` (its positions and collision
-    filters are modified). ``object_instance`` None: a planning model without
-    the object (robot vs table only). ``object_surface``: the object's surface,
+    filters are modified). The object is ``object_instance``'s geometry and the
+    ``object_geometry_ids`` (e.g. registered in ``sg_context`` only); neither:
+    a planning model without the object (robot vs table only). ``object_surface``: the object's surface,
     for :func:`clear_object` (None: not checked). Never raises for unreachable
     or colliding poses: the returned plan's ``status`` says what failed.
     """
@@ -420,7 +421,8 @@ def plan_grasp(plant: MultibodyPlant, plant_context, scene_graph, sg_context, *,
     postures = motion_W.postures
     q_open, q_pre, q_closed = (np.asarray(postures[k]) for k in ("open", "preshape", "closed"))
     c = planning_scene(plant, plant_context, scene_graph, sg_context, arm=arm, hand=hand,
-                       object_instance=object_instance, table=table, q_arm_start=q_arm_start, q_hand=q_pre)
+                       object_instance=object_instance, table=table, q_arm_start=q_arm_start, q_hand=q_pre,
+                       object_geometry_ids=object_geometry_ids)
     try:
         X, shift_W = clear_object(c, {name: RigidTransform(motion_W.pose(name)) for name in ("pregrasp", "grasp")},
                                   object_surface, params)

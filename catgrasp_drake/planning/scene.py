@@ -50,13 +50,14 @@ class PlanningScene:
 
 def planning_scene(plant: MultibodyPlant, plant_context, scene_graph, sg_context, *, arm: ModelInstanceIndex,
                    hand: ModelInstanceIndex, object_instance: ModelInstanceIndex | None, table: ModelInstanceIndex,
-                   q_arm_start: np.ndarray, q_hand: np.ndarray) -> PlanningScene:
+                   q_arm_start: np.ndarray, q_hand: np.ndarray, object_geometry_ids=()) -> PlanningScene:
     """The scene of ``plant`` with the hand at posture ``q_hand`` (mimic followers consistent), filters applied.
 
     ``plant_context``/``sg_context``: a SCRATCH context of the diagram holding
-    ``plant`` and ``scene_graph``. ``object_instance`` None: no object (robot
-    vs table only). ``shoulder_W`` is the shoulder's position with the arm at
-    ``q_arm_start``.
+    ``plant`` and ``scene_graph``. The object is the proximity geometry of
+    ``object_instance`` and the ``object_geometry_ids`` (e.g. registered in
+    ``sg_context`` only); neither: no object (robot vs table only).
+    ``shoulder_W`` is the shoulder's position with the arm at ``q_arm_start``.
     """
     arm_q_idx = np.array([plant.GetJointByName(n, arm).position_start() for n in ARM_JOINTS])
     hand_q_idx = np.array([plant.GetJointByName(n, hand).position_start() for n in HAND_ACTUATED_JOINTS])
@@ -78,7 +79,7 @@ def planning_scene(plant: MultibodyPlant, plant_context, scene_graph, sg_context
         robot_geoms=geometry_set(plant, scene_graph, [arm, hand]),
         carried_ids=hand_ids + body_geometry_ids(scene_graph, plant.GetJointByName(ARM_JOINTS[-1], arm).child_body()),
         hand_ids=hand_ids,
-        object_geoms=geometry_set(plant, scene_graph, object_instances),
+        object_geoms=GeometrySet(geometry_ids(plant, scene_graph, object_instances) + list(object_geometry_ids)),
         table_geoms=geometry_set(plant, scene_graph, [table]),
         table_ids=geometry_ids(plant, scene_graph, [table]), shoulder_W=shoulder_W)
     # Planning-only collision filters: robot vs itself and object vs table never count.

@@ -190,7 +190,7 @@ class MotionPlanner(LeafSystem):
     Parameters (constructor): the executing ``plant`` and its ``arm``/``hand``
     instances (for the actuator order), the ``PlanningModel`` without the
     object, ``obstacle_model`` (``points_W (N, 3) -> PlanningModel`` with
-    them as the object, e.g. ``functools.partial(make_planning_model, scenario)``),
+    them as the object, e.g. ``planning_model.with_obstacle``),
     ``params``, ``min_confidence``.
     Evaluation model: the plan is a cache entry that depends on the input
     ports only, so IK runs once per motion (at the first evaluation) and every
