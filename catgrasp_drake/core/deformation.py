@@ -33,6 +33,8 @@ position; since the orthonormalisation is the polar factor,
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 from catgrasp_drake.core.kernels import gaussian_kernel, kernel_width, sqdist
@@ -70,6 +72,23 @@ def deform_points(canonical, W, beta, points) -> np.ndarray:
     """``points + G(points, canonical) W``: the dense deformation field applied to any (K, 3) points."""
     P = as_points(points, "points", min_points=0)
     return P + displacement(canonical, W, beta, P)
+
+
+def _deform_canonical(C: np.ndarray, W: np.ndarray, beta: float) -> np.ndarray:
+    """``deform_points(C, W, beta, C)`` (checked inputs), bit for bit, with the (M, M) kernel of ``C`` computed once
+    per canonical shape and width (:func:`_self_kernel_chunks`): every warp of a model's poses needs it."""
+    out = np.empty_like(C)
+    for k, G in enumerate(_self_kernel_chunks(C.tobytes(), C.shape, beta)):
+        out[k * _CHUNK:(k + 1) * _CHUNK] = G @ W
+    return C + out
+
+
+@functools.lru_cache(maxsize=4)
+def _self_kernel_chunks(data: bytes, shape: tuple, beta: float) -> tuple:
+    """The row chunks of ``G(C, C)`` exactly as :func:`displacement` computes them for ``points = C`` (C given by
+    its float64 bytes and shape: the cache compares them exactly; at most 4 shapes kept)."""
+    C = np.frombuffer(data, dtype=np.float64).reshape(shape)
+    return tuple(gaussian_kernel(C[lo:lo + _CHUNK], C, beta) for lo in range(0, shape[0], _CHUNK))
 
 
 def jacobian(canonical, W, beta, points) -> np.ndarray:
@@ -188,7 +207,7 @@ def local_rotations(canonical, W, beta, points, radius: float) -> np.ndarray:
     C, W, beta = _check_field(canonical, W, beta)
     P = as_points(points, "points", min_points=0)
     radius = kernel_width(radius, "rotation_radius")
-    D = deform_points(C, W, beta, C)
+    D = _deform_canonical(C, W, beta)
     out = np.empty((len(P), 3, 3))
     for k, p in enumerate(P):
         w = np.exp(-((C - p) ** 2).sum(axis=1) / (2 * radius**2))

@@ -140,3 +140,26 @@ def test_bad_inputs(field):
         warp_poses(C, W, BETA, np.eye(3))
     with pytest.raises(InputError, match="NaN"):
         deform_points(C, W, BETA, np.full((2, 3), np.nan))
+
+
+@pytest.mark.parametrize("n_points", [300, 1500])  # one kernel chunk, and two (deformation._CHUNK = 1024)
+def test_the_canonical_self_kernel_is_computed_once_and_changes_no_bit(n_points):
+    """local_rotations deforms every canonical point; the (M, M) kernel of C is kept per shape and width, and the
+    deformed points are bit for bit deform_points(C, W, beta, C) for any W, before and after the cache is filled."""
+    from catgrasp_drake.core import deformation
+
+    rng = np.random.default_rng(n_points)
+    C = rng.uniform(-0.08, 0.08, size=(n_points, 3))
+    deformation._self_kernel_chunks.cache_clear()
+    for _ in range(3):
+        W = rng.normal(scale=0.01, size=C.shape)
+        assert np.array_equal(deformation._deform_canonical(C, W, BETA), deform_points(C, W, BETA, C))
+    info = deformation._self_kernel_chunks.cache_info()
+    assert info.misses == 1 and info.hits == 2
+    assert len(deformation._self_kernel_chunks(C.tobytes(), C.shape, BETA)) == -(-n_points // deformation._CHUNK)
+    # another shape or width is another kernel, not a stale one
+    C2 = C.copy()
+    C2[0, 0] += 1e-3
+    W = rng.normal(scale=0.01, size=C.shape)
+    assert np.array_equal(deformation._deform_canonical(C2, W, BETA), deform_points(C2, W, BETA, C2))
+    assert np.array_equal(deformation._deform_canonical(C, W, 2 * BETA), deform_points(C, W, 2 * BETA, C))
