@@ -114,7 +114,8 @@ def _register_hull(plant: MultibodyPlant, scene_graph, sg_context, points_W: np.
     hull.set_proximity_properties(props)
     frame_id = scene_graph.world_frame_id() if frame_id is None else frame_id
     hull_id = scene_graph.RegisterGeometry(sg_context, plant.get_source_id(), frame_id, hull)
-    # as the plant filters the bodies welded to the world among themselves (table, arm base), and would the hull's
+    # the plant filters collisions among the bodies welded to the world (table, arm base, the hull's holder);
+    # the hull, registered after that, gets the same filter
     welded = [g for body in plant.GetBodiesWeldedTo(plant.world_body()) for g in body_geometry_ids(scene_graph, body)]
     scene_graph.collision_filter_manager(sg_context).Apply(
         CollisionFilterDeclaration().ExcludeBetween(GeometrySet([hull_id]), GeometrySet(welded)))
