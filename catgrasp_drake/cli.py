@@ -738,9 +738,9 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--methods", nargs="+", default=["latent", "latent_map", "paper", "nearest", "rigid", "cpd"],
                    choices=["latent", "latent_map", "latent_fast", "paper", "nearest", "rigid", "cpd",
                             "true_object"])
-    b.add_argument("--views", nargs="+", default=["single"], choices=["single", "active", "two", "full"],
-                   help="single (the measure), active (a second camera's view when the first leaves the yaw "
-                        "open), two (always both), full (4 cameras)")
+    b.add_argument("--views", nargs="+", default=["single"], choices=["single", "active", "two", "three", "full"],
+                   help="single (the measure), active (another camera's view while the views so far leave the "
+                        "yaw open, at most 3), two / three (always that many), full (4 cameras)")
     b.add_argument("--placements", type=_int_at_least(1, 1000), default=3, help="placements per instance and view")
     b.add_argument("--instances-per-category", type=_int_at_least(1), default=12)
     b.add_argument("--instances", nargs="+", help="only these instances of the split")
@@ -774,9 +774,9 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("--object", default=None, metavar="DIR",
                    help="an imported object's directory (catgrasp import-object) instead of an embedded instance")
     d.add_argument("--seed", type=_int_at_least(0, MAX_SEED), default=0, help="seed of the object's random placement")
-    d.add_argument("--view", choices=("single", "active", "two", "full"), default="single",
-                   help="one depth camera; active: and a second when the first leaves the object's yaw open; "
-                        "two: both always; full: four around the object")
+    d.add_argument("--view", choices=("single", "active", "two", "three", "full"), default="single",
+                   help="one depth camera; active: and another while the views so far leave the object's yaw "
+                        "open (at most 3); two / three: that many always; full: four around the object")
     d.add_argument("--model", help="category model file (default: models/trained/<category>.npz)")
     d.add_argument("--min-confidence", type=_float_in(0.0, 1.0), default=0.0,
                    help="refuse the grasp below this estimate confidence (0..1)")

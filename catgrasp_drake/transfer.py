@@ -44,21 +44,24 @@ from catgrasp_drake.station.builder import StationHandles, add_station, make_sta
 from catgrasp_drake.station.scenario import CameraSpec, Scenario
 from catgrasp_drake.systems.grasp_execution import MotionPlanner, placeholder_motion_W
 from catgrasp_drake.systems.predictors import GraspPredictor
-from catgrasp_drake.systems.shape_estimator import LatentShapeEstimator, ShapeEstimate
+from catgrasp_drake.systems.shape_estimator import EXTRA_VIEWS, LatentShapeEstimator, ShapeEstimate
 from catgrasp_drake.trial import judge_spec, pose_tuple, simulate_and_judge
 from catgrasp_drake.viz.meshcat_tools import COLORS, draw_cloud, draw_triad
 
-#: "single": one camera, the visibility-aware fit (the benchmark's measure); "active": the same, and a second
-#: camera's view merged in when the first view leaves the object's yaw open (``systems.shape_estimator.
-#: yaw_ambiguous``); "two": both views always; "full": FULL_VIEW_CAMERAS cameras on a ring, merged.
-VIEWS = ("single", "active", "two", "full")
-#: The views with a second camera, and the estimator's policy for it.
-SECOND_VIEW_POLICY = {"active": "ambiguous", "two": "always"}
-#: The second camera: the first turned this far (deg, counter-clockwise seen from above) about the vertical
-#: through the point it looks at -- same distance, same height. +90 and -90 were compared on the committed
-#: mugs with the first, visibility-free merged fit (``python benchmarks/bench_second_view.py --azimuths 90 -90
-#: --no-visibility``: yaw within 10 deg on 42/45 and 31/45 views with both views always).
-SECOND_VIEW_AZIMUTH_DEG = 90.0
+#: "single": one camera, the visibility-aware fit (the benchmark's measure); "active": the same, and further
+#: cameras' views (:data:`EXTRA_VIEW_AZIMUTHS_DEG`) merged in one at a time while the views so far leave the
+#: object's yaw open (``systems.shape_estimator.yaw_ambiguous``; at most three views); "two" / "three": the
+#: first two / three views always; "full": FULL_VIEW_CAMERAS cameras on a ring, merged.
+VIEWS = ("single", "active", "two", "three", "full")
+#: The views with further cameras: the estimator's policy for them, and how many further cameras.
+EXTRA_VIEW_POLICY = {"active": ("ambiguous", 2), "two": ("always", 1), "three": ("always", 2)}
+#: The further cameras: the first turned this far (deg, counter-clockwise seen from above) about the vertical
+#: through the point it looks at -- same distance, same height -- in the order they are taken. +90 and -90
+#: were compared for the second on the committed mugs with the first, visibility-free merged fit (``python
+#: benchmarks/bench_second_view.py --azimuths 90 -90 --no-visibility``: yaw within 10 deg on 42/45 and 31/45
+#: views with both views always); the third looks from the other side (session 25: with all three views
+#: always, 45/45; ``benchmarks/results/experiments/s25_views/probe.py``).
+EXTRA_VIEW_AZIMUTHS_DEG = (90.0, -90.0)
 #: Cameras of the "full" view: on a ring around the object, this far (m) and this high (deg).
 FULL_VIEW_CAMERAS = 4
 FULL_VIEW_DISTANCE = 0.75
@@ -80,16 +83,17 @@ def ring_cameras(scenario: Scenario, n: int = FULL_VIEW_CAMERAS, distance: float
     return tuple(cams)
 
 
-def second_camera(first: CameraSpec, azimuth_deg: float = SECOND_VIEW_AZIMUTH_DEG) -> CameraSpec:
+def turned_camera(first: CameraSpec, azimuth_deg: float = EXTRA_VIEW_AZIMUTHS_DEG[0],
+                  name: str = "second_view") -> CameraSpec:
     """The camera ``first`` turned ``azimuth_deg`` about the vertical through its target (same distance, height,
-    intrinsics), named "second_view"."""
+    intrinsics), named ``name``."""
     X_WC = first.X_WC_matrix()
     eye = X_WC[:3, 3]
     target = np.asarray(first.look_at_target if first.look_at_target is not None else eye + 0.8 * X_WC[:3, 2], float)
     a = np.radians(azimuth_deg)
     R = np.array([[np.cos(a), -np.sin(a), 0.0], [np.sin(a), np.cos(a), 0.0], [0.0, 0.0, 1.0]])
     eye2 = target + R @ (eye - target)
-    return dataclasses.replace(first, name="second_view", X_WC=None, look_at_eye=tuple(float(v) for v in eye2),
+    return dataclasses.replace(first, name=name, X_WC=None, look_at_eye=tuple(float(v) for v in eye2),
                                look_at_target=tuple(float(v) for v in target))
 
 
@@ -220,10 +224,11 @@ def make_transfer_diagram(scenario: Scenario, model: CategoryModel, meshcat: Mes
     """The station with the transfer systems wired in (module docstring); see :class:`TransferDiagram`.
 
     ``view`` "single": the scenario's camera ``camera`` (default its first)
-    with the visibility-aware fit; "active" / "two": the same, and a second
-    camera (:func:`second_camera`) whose view the estimator merges in when
-    the first leaves the yaw open / always; "full": ``FULL_VIEW_CAMERAS``
-    cameras on a ring around the object, clouds merged, no visibility model.
+    with the visibility-aware fit; "active" / "two" / "three": the same, and
+    further cameras (:func:`turned_camera`, :data:`EXTRA_VIEW_AZIMUTHS_DEG`)
+    whose views the estimator merges in while the yaw is open / always;
+    "full": ``FULL_VIEW_CAMERAS`` cameras on a ring around the object,
+    clouds merged, no visibility model.
     ``min_confidence``: below it the motion is refused (status "refused: ...").
     ``method`` (:mod:`catgrasp_drake.prediction`): "latent" (this project),
     or a baseline -- "paper" (no visibility model), "rigid", "cpd", "nearest"
@@ -242,22 +247,26 @@ def make_transfer_diagram(scenario: Scenario, model: CategoryModel, meshcat: Mes
         scenario = scenario.replace(cameras=ring_cameras(scenario))
     elif not scenario.cameras:
         raise InputError(f"scenario {scenario.name!r} has no camera; a single view needs one")
-    elif view in SECOND_VIEW_POLICY:
+    elif view in EXTRA_VIEW_POLICY:
         first = [c for c in scenario.cameras if c.name == (camera or scenario.cameras[0].name)]
         if not first:
             raise InputError(f"camera {camera!r} not in scenario {scenario.name!r}; "
                              f"cameras: {sorted(c.name for c in scenario.cameras)}")
-        scenario = scenario.replace(cameras=(first[0], second_camera(first[0])))
+        extra = EXTRA_VIEW_POLICY[view][1]
+        scenario = scenario.replace(cameras=(first[0],) + tuple(
+            turned_camera(first[0], az, f"{name}_view")
+            for name, az in zip(EXTRA_VIEWS[:extra], EXTRA_VIEW_AZIMUTHS_DEG)))
     builder = DiagramBuilder()
     h = add_station(builder, scenario, meshcat)
     space = rigid_space(model.space) if setup.rigid else model.space
     inference_kwargs = setup.inference_kwargs | inference_kwargs  # (the caller's options win)
     estimator = builder.AddNamedSystem("shape_estimator", LatentShapeEstimator(
         space, scenario.table.pose.matrix(), yaw_candidates=yaw_candidates,
-        second_view=SECOND_VIEW_POLICY.get(view, "never"), **inference_kwargs))
-    if view in SECOND_VIEW_POLICY:
-        builder.Connect(h.object_clouds["second_view"].GetOutputPort("object_cloud_W"),
-                        estimator.GetInputPort("second_cloud_W"))
+        view_policy=EXTRA_VIEW_POLICY.get(view, ("never", 0))[0], **inference_kwargs))
+    extra_views = EXTRA_VIEWS[:EXTRA_VIEW_POLICY.get(view, ("never", 0))[1]]
+    for name in extra_views:
+        builder.Connect(h.object_clouds[f"{name}_view"].GetOutputPort("object_cloud_W"),
+                        estimator.GetInputPort(f"{name}_cloud_W"))
     if view != "full":
         name = camera or scenario.cameras[0].name
         if name not in h.cameras:
@@ -265,9 +274,9 @@ def make_transfer_diagram(scenario: Scenario, model: CategoryModel, meshcat: Mes
         cloud_port = h.object_clouds[name].GetOutputPort("object_cloud_W")
         if setup.visibility:
             builder.Connect(h.cameras[name].body_pose_in_world_output_port(), estimator.GetInputPort("X_WC"))
-            if view in SECOND_VIEW_POLICY:
-                builder.Connect(h.cameras["second_view"].body_pose_in_world_output_port(),
-                                estimator.GetInputPort("second_X_WC"))
+            for name in extra_views:
+                builder.Connect(h.cameras[f"{name}_view"].body_pose_in_world_output_port(),
+                                estimator.GetInputPort(f"{name}_X_WC"))
     else:
         merger = builder.AddNamedSystem("cloud_merger", CloudMerger(len(h.cameras)))
         for i, name in enumerate(h.cameras):
@@ -340,7 +349,7 @@ class TransferResult:
     #: (rank of the executed grasp among the candidates; 0 = the first choice), ``tried`` (candidates
     #: planned), ``hypothesis`` (the executed grasp's fit in energy order; 0 = the MAP fit), ``support``.
     posterior: dict = field(default_factory=dict)
-    #: Camera views the estimate fitted: 1, or 2 when the "active"/"two" view merged the second camera's in.
+    #: Camera views the estimate fitted: 1, or more when the "active"/"two"/"three" view merged further ones in.
     views_used: int = 1
 
     def to_dict(self) -> dict:

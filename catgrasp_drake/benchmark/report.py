@@ -49,7 +49,7 @@ SPLIT_TITLES = {"test": "held-out generated instances", "ycb": "real scans (YCB)
 #: Splits of tuned-on objects: in the full tables, never in the README's summary of held-out results.
 TUNING_SPLITS = ("stress",)
 CATEGORIES = ("drill", "spray_bottle", "mug")
-VIEWS = ("single", "active", "two", "full")
+VIEWS = ("single", "active", "two", "three", "full")
 METHODS = ("latent", "latent_map", "latent_fast", "paper", "nearest", "rigid", "cpd", "true_object")
 METHOD_LABELS = {"true_object": "true-object planner (ablation)", "latent_map": "latent, MAP fit only (ablation)",
                  "latent_fast": "latent, fast fit (ablation)"}
@@ -435,11 +435,11 @@ def _posterior_section(records: Sequence[dict]) -> list[str]:
 VIEW_PAIR_KEY = ("split", "category", "instance", "trial", "method", "seed")
 
 
-def _second_view_section(records: Sequence[dict]) -> list[str]:
-    """Each view with a second camera against the single view on the same trials: functional rates, how many
-    trials took the second view, and the paired difference."""
+def _more_views_section(records: Sequence[dict]) -> list[str]:
+    """Each view with further cameras against the single view on the same trials: functional rates, how many
+    trials fitted 1, 2 and 3 views, and the paired difference."""
     rows = []
-    for view in [v for v in _ordered(_field(records, "view"), VIEWS) if v in ("active", "two")]:
+    for view in [v for v in _ordered(_field(records, "view"), VIEWS) if v in ("active", "two", "three")]:
         mine = _select(records, view=view)
         for split in _ordered(_field(mine, "split"), SPLITS):
             for category in _ordered(_field(_select(mine, split=split), "category"), CATEGORIES):
@@ -453,18 +453,19 @@ def _second_view_section(records: Sequence[dict]) -> list[str]:
                     d = paired_bootstrap(pairs.field("instance"), b, a, n_boot=N_BOOT, seed=SEED, level=LEVEL)
                     interval = (f"{_pp(d.diff)} pp [1 instance]" if _single_instance(pairs.field("instance"), None)
                                 else f"{_pp(d.diff)} pp [{_pp(d.low)}, {_pp(d.high)}]")
-                    second = sum(int(r.get("views_used", 1)) > 1 for r in pairs.b)
+                    used = [int(r.get("views_used", 1)) for r in pairs.b]
                     rows.append([f"`{split}`", _category(category), _label(method), view, str(len(pairs)),
-                                 f"{second}/{len(pairs)}", f"{int(a.sum())}/{len(a)}", f"{int(b.sum())}/{len(b)}",
-                                 interval])
+                                 " / ".join(str(used.count(n)) for n in (1, 2, 3)), f"{int(a.sum())}/{len(a)}",
+                                 f"{int(b.sum())}/{len(b)}", interval])
     if not rows:
         return []
-    return ["### A second view", "",
-            "The same trials seen once (`single`) and with a second camera turned 90° about the object (`active`: "
-            "its view merged in only when the first leaves the yaw open; `two`: always); second views = trials "
-            "whose estimate fitted both; difference = second-view minus single-view functional rate, paired "
-            "trials, 95 % interval.", "",
-            _table(("split", "category", "method", "view", "paired trials", "second views", "single functional",
+    return ["### More views", "",
+            "The same trials seen once (`single`) and with further cameras, the first turned +90° and then −90° "
+            "about the object (`active`: the next view merged in only while the views so far leave the yaw open, "
+            "at most three; before session 25 at most two; `two`, `three`: always); views 1 / 2 / 3 = trials "
+            "whose estimate fitted that many; difference = that view's minus the single view's functional rate, "
+            "paired trials, 95 % interval.", "",
+            _table(("split", "category", "method", "view", "paired trials", "views 1 / 2 / 3", "single functional",
                     "functional", "difference [95 %]"), ("l", "l", "l", "l", "r", "r", "l", "l", "l"), rows), ""]
 
 
@@ -508,7 +509,7 @@ def benchmark_tables(records: Iterable[dict]) -> str:
         out += _split_section(split, _select(default, split=split))
     out += _physics_section(records)
     out += _posterior_section(default)
-    out += _second_view_section(default)
+    out += _more_views_section(default)
     out += _failure_section(default)
     out += _cost_section(records)
     return "\n".join(out).rstrip("\n") + "\n"

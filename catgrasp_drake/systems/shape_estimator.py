@@ -48,14 +48,17 @@ MIN_OBSERVED_POINTS = 30
 AUTO_VOXEL_FACTOR = 1.4
 
 
-#: When the estimator also fits a second view (``second_view``): "never"; "ambiguous": only when the
-#: first view's shape posterior is yaw-ambiguous (:func:`yaw_ambiguous`); "always".
-SECOND_VIEW_POLICIES = ("never", "ambiguous", "always")
+#: When the estimator fits the further views (``view_policy``): "never"; "ambiguous": one more view merged in
+#: at a time, while the views so far leave the object's yaw open (:func:`yaw_ambiguous`); "always": every view.
+VIEW_POLICIES = ("never", "ambiguous", "always")
+#: The further views' names, in the order they are taken: their ports are ``<name>_cloud_W``, ``<name>_X_WC``.
+EXTRA_VIEWS = ("second", "third")
 #: A view is yaw-ambiguous when a shape hypothesis turned at least AMBIGUOUS_YAW_DEG from the MAP fit (about
 #: the vertical) keeps a tempered posterior weight above AMBIGUOUS_WEIGHT. Tuned on the COMMITTED mugs (45
 #: views, 3 hypotheses; ``python benchmarks/bench_second_view.py``): 19 MAP fits are more than 10 deg off;
 #: the rule flags 16 of them and 8 of the 26 right ones (24 second views; 39/45 right after, against 26 with
-#: one view and 40 with both views always); weight 0.2: 12 and 6 (35/45).
+#: one view and 40 with both views always); weight 0.2: 12 and 6 (35/45). A third view while two still leave
+#: it open (session 25, ``benchmarks/results/experiments/s25_views/probe.py``, the same 45 views): 42/45.
 AMBIGUOUS_YAW_DEG = 30.0
 AMBIGUOUS_WEIGHT = 0.05
 
@@ -99,7 +102,7 @@ class ShapeEstimate:
     result: InferenceResult | None = None
     timing: dict = field(default_factory=dict)
     hypotheses: tuple = ()
-    views: int = 1  # camera views fitted: 2 when a second view was merged in (``second_view``)
+    views: int = 1  # camera views fitted: more than 1 when further views were merged in (``view_policy``)
 
     # Contexts deep-copy abstract state; an estimate is never mutated (and holds the shape space).
     def __deepcopy__(self, memo):
@@ -203,29 +206,43 @@ def yaw_ambiguous(estimate: ShapeEstimate, *, min_weight: float = AMBIGUOUS_WEIG
     return False
 
 
-def estimate_with_second_view(space: ShapeSpace, p_W: np.ndarray, X_WT: np.ndarray, *, camera_W=None,
-                              second_W=None, second_camera_W=None, policy: str = "ambiguous",
-                              **kwargs) -> ShapeEstimate:
+def estimate_with_views(space: ShapeSpace, p_W: np.ndarray, X_WT: np.ndarray, *, camera_W=None, extra_views=(),
+                        policy: str = "ambiguous", **kwargs) -> ShapeEstimate:
     """:func:`estimate_on_table` of the first view (``p_W``, seen from ``camera_W``), then -- by ``policy``
-    (:data:`SECOND_VIEW_POLICIES`) -- of both views merged (``second_W`` (M, 3) W, seen from
-    ``second_camera_W``): with both camera positions the merged fit is visibility-aware (a model point is a
-    mixture centre when either camera sees it); without them, it is fitted like a full cloud. The result's
-    ``views`` says which; its ``timing["first_view"]`` holds the first fit's time when both ran."""
-    if policy not in SECOND_VIEW_POLICIES:
-        raise InputError(f"second view policy: expected one of {SECOND_VIEW_POLICIES}, got {policy!r}")
-    first = estimate_on_table(space, p_W, X_WT, camera_W=camera_W, **kwargs)
-    second_W = np.zeros((0, 3)) if second_W is None else real_array(second_W, "second_W", "(M, 3) array")
-    if policy == "never" or second_W.size == 0 or (policy == "ambiguous" and not yaw_ambiguous(first)):
-        return first
-    merged = np.vstack([np.asarray(p_W, float).reshape(-1, 3), second_W.reshape(-1, 3)])
-    cameras = None
-    if camera_W is not None and second_camera_W is not None:
-        cameras = np.vstack([camera_positions(camera_W), camera_positions(second_camera_W)])
-    both = estimate_on_table(space, merged, X_WT, camera_W=cameras, **kwargs)
-    timing = dict(both.timing) | {"first_view": float(sum(v for v in first.timing.values()
-                                                          if isinstance(v, (int, float))))}
-    return dataclasses.replace(both, views=2, timing=timing,
-                               hypotheses=tuple(dataclasses.replace(h, views=2) for h in both.hypotheses))
+    (:data:`VIEW_POLICIES`) -- of the views merged with the further ``extra_views``, a sequence of
+    ``(points_W (M, 3), camera position (3,) or None)`` in the order they are taken: "ambiguous" merges one
+    more at a time while the fit so far leaves the yaw open; "always" merges every view at once. With every
+    merged view's camera position the merged fit is visibility-aware (a model point is a mixture centre when
+    any of those cameras sees it); without them, it is fitted like a full cloud. Views without points are
+    skipped. The result's ``views`` counts the views fitted; ``timing["earlier_views"]`` holds the time of
+    the fits before the last (s)."""
+    if policy not in VIEW_POLICIES:
+        raise InputError(f"view policy: expected one of {VIEW_POLICIES}, got {policy!r}")
+    views = [(np.asarray(p_W, float).reshape(-1, 3), camera_W)]
+    for k, view in enumerate(extra_views):
+        try:
+            points, camera = view
+        except (TypeError, ValueError):
+            raise InputError(f"extra_views[{k}]: expected a pair (points_W, camera position or None)") from None
+        points = np.zeros((0, 3)) if points is None else real_array(points, f"extra_views[{k}] points", "(M, 3)")
+        if points.size:
+            views.append((points.reshape(-1, 3), camera))
+    fit = estimate_on_table(space, views[0][0], X_WT, camera_W=camera_W, **kwargs)
+    if policy == "never" or len(views) == 1:
+        return fit
+    earlier = 0.0
+    n = 1
+    while n < len(views) and (policy == "always" or yaw_ambiguous(fit)):
+        earlier += float(sum(v for v in fit.timing.values() if isinstance(v, (int, float))))
+        n = len(views) if policy == "always" else n + 1
+        merged = np.vstack([p for p, _ in views[:n]])
+        cameras = None
+        if all(c is not None for _, c in views[:n]):
+            cameras = np.vstack([camera_positions(c) for _, c in views[:n]])
+        fit = estimate_on_table(space, merged, X_WT, camera_W=cameras, **kwargs)
+        fit = dataclasses.replace(fit, views=n, timing=dict(fit.timing) | {"earlier_views": earlier},
+                                  hypotheses=tuple(dataclasses.replace(h, views=n) for h in fit.hypotheses))
+    return fit
 
 
 class LatentShapeEstimator(LeafSystem):
@@ -239,6 +256,8 @@ class LatentShapeEstimator(LeafSystem):
         - X_WC (optional)
         - second_cloud_W (optional)
         - second_X_WC (optional)
+        - third_cloud_W (optional)
+        - third_X_WC (optional)
         output_ports:
         - x
         - X_WO
@@ -254,11 +273,12 @@ class LatentShapeEstimator(LeafSystem):
         X_WC: ``RigidTransform``, pose of the camera C in W (single view: its
             position turns on the visibility-aware fit); leave it
             unconnected for a full (multi-view) cloud.
-        second_cloud_W: ``PointCloud`` (W, metres) of the object seen by a
-            second camera, merged in by the ``second_view`` policy
-            (:func:`estimate_with_second_view`); unconnected: one view.
-        second_X_WC: ``RigidTransform``, pose of the second camera in W
-            (with ``X_WC``: the merged fit is visibility-aware for both).
+        second_cloud_W, third_cloud_W: ``PointCloud`` (W, metres) of the object
+            seen by further cameras (:data:`EXTRA_VIEWS`, in that order),
+            merged in by the ``view_policy`` (:func:`estimate_with_views`);
+            unconnected: not taken.
+        second_X_WC, third_X_WC: ``RigidTransform``, pose of that camera in W
+            (with ``X_WC``: the merged fit is visibility-aware for every camera).
     Output ports:
         x: latent vector (q,), whitened (N(0, I) over the category).
         X_WO: ``RigidTransform``, rigid part of the fitted pose of the canonical frame O in W.
@@ -275,11 +295,11 @@ class LatentShapeEstimator(LeafSystem):
     fit's voxel grid, as in :func:`estimate_on_table`; resolved once here) and
     extra keyword arguments for ``infer_latent_pose`` (e.g.
     ``**core.inference.LEGACY_SEARCH`` with ``voxel_size=None``: the settings
-    before issue 17); ``second_view`` (:data:`SECOND_VIEW_POLICIES`, "never"
-    by default): when the second camera's cloud is merged in.
+    before issue 17); ``view_policy`` (:data:`VIEW_POLICIES`, "never" by
+    default): when the further cameras' clouds are merged in.
     """
 
-    def __init__(self, space: ShapeSpace, X_WT, *, yaw_candidates=8, voxel_size="auto", second_view: str = "never",
+    def __init__(self, space: ShapeSpace, X_WT, *, yaw_candidates=8, voxel_size="auto", view_policy: str = "never",
                  **inference_kwargs):
         super().__init__()
         if not isinstance(space, ShapeSpace):
@@ -289,13 +309,14 @@ class LatentShapeEstimator(LeafSystem):
         self._yaws = yaw_candidates
         self._voxel = fit_voxel_size(space, voxel_size)
         self._kwargs = dict(inference_kwargs)
-        if second_view not in SECOND_VIEW_POLICIES:
-            raise InputError(f"second_view: expected one of {SECOND_VIEW_POLICIES}, got {second_view!r}")
-        self._second_view = second_view
+        if view_policy not in VIEW_POLICIES:
+            raise InputError(f"view_policy: expected one of {VIEW_POLICIES}, got {view_policy!r}")
+        self._view_policy = view_policy
         self._cloud_in = self.DeclareAbstractInputPort("object_cloud_W", AbstractValue.Make(PointCloud()))
         self._camera_in = self.DeclareAbstractInputPort("X_WC", AbstractValue.Make(RigidTransform()))
-        self._second_in = self.DeclareAbstractInputPort("second_cloud_W", AbstractValue.Make(PointCloud()))
-        self._second_camera_in = self.DeclareAbstractInputPort("second_X_WC", AbstractValue.Make(RigidTransform()))
+        self._extra_in = [(self.DeclareAbstractInputPort(f"{name}_cloud_W", AbstractValue.Make(PointCloud())),
+                           self.DeclareAbstractInputPort(f"{name}_X_WC", AbstractValue.Make(RigidTransform())))
+                          for name in EXTRA_VIEWS]
         self._state = self.DeclareAbstractState(AbstractValue.Make(failed_estimate(space.q, "not yet estimated")))
         self.DeclareInitializationUnrestrictedUpdateEvent(self._update)
         state_only = {self.abstract_state_ticket(self._state)}
@@ -333,13 +354,15 @@ class LatentShapeEstimator(LeafSystem):
         camera_W = None
         if self._camera_in.HasValue(context):
             camera_W = self._camera_in.Eval(context).translation()
-        second_W = points_from_cloud(self._second_in.Eval(context)) if self._second_in.HasValue(context) else None
-        second_camera_W = None
-        if self._second_camera_in.HasValue(context):
-            second_camera_W = self._second_camera_in.Eval(context).translation()
-        return estimate_with_second_view(self._space, p_W, self._X_WT, camera_W=camera_W, second_W=second_W,
-                                         second_camera_W=second_camera_W, policy=self._second_view,
-                                         yaw_candidates=self._yaws, voxel_size=self._voxel, **self._kwargs)
+        extra = []
+        for cloud_in, camera_in in self._extra_in:
+            if not cloud_in.HasValue(context):
+                break  # the views are taken in order
+            extra.append((points_from_cloud(cloud_in.Eval(context)),
+                          camera_in.Eval(context).translation() if camera_in.HasValue(context) else None))
+        return estimate_with_views(self._space, p_W, self._X_WT, camera_W=camera_W, extra_views=extra,
+                                   policy=self._view_policy, yaw_candidates=self._yaws, voxel_size=self._voxel,
+                                   **self._kwargs)
 
     def set_estimate(self, context, estimate: ShapeEstimate) -> None:
         """Write ``estimate`` into this system's state in ``context``."""

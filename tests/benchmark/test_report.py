@@ -301,25 +301,25 @@ def test_one_instance_gets_no_interval():
     assert _rate(["d", "s"], [1, 0], strata=["drill", "spray"]).endswith("[1 instance]")
 
 
-def test_the_second_view_section_pairs_each_trial_with_its_single_view():
+def test_the_more_views_section_pairs_each_trial_with_its_single_view():
     def rec(instance, trial, view, ok, views_used=1):
         return {"split": "test", "category": "mug", "instance": instance, "trial": trial, "view": view,
                 "method": "latent", "physics": "default", "grasp": ok, "functional": ok, "reason": None,
                 "seed": 0, "views_used": views_used, "timings": {"total": 2.0}}
 
     # 10 mugs x 3 trials; the single view functional on mugs 0-3; the active view takes a second look on
-    # mugs 4-9's trials 0-1 and puts those right (12 more), keeps the rest as the single view had them
+    # mugs 4-9's trials 0-1 (a third on mug 9's) and puts those right (12 more), keeps the rest as they were
     rs = [rec(f"mug_t{i:02d}", t, "single", i < 4) for i in range(10) for t in range(3)]
-    rs += [rec(f"mug_t{i:02d}", t, "active", i < 4 or t < 2, 2 if i >= 4 and t < 2 else 1)
+    rs += [rec(f"mug_t{i:02d}", t, "active", i < 4 or t < 2, (3 if i == 9 else 2) if i >= 4 and t < 2 else 1)
            for i in range(10) for t in range(3)]
     text = benchmark_tables(rs)
-    assert "### A second view" in text
+    assert "### More views" in text
     row = [line for line in text.splitlines() if line.startswith("| `test` | mug | latent | active |")][0]
     cells = [c.strip() for c in row.strip("|").split("|")]
-    assert cells[4:8] == ["30", "12/30", "12/30", "24/30"]
+    assert cells[4:8] == ["30", "18 / 10 / 2", "12/30", "24/30"]
     assert cells[8].startswith("+40 pp [")
-    # no second-view records: no section
-    assert "### A second view" not in benchmark_tables([r for r in rs if r["view"] == "single"])
+    # no records of further views: no section
+    assert "### More views" not in benchmark_tables([r for r in rs if r["view"] == "single"])
 
 
 def test_a_tuning_split_is_in_the_full_tables_but_never_in_the_summary():

@@ -1,8 +1,8 @@
-"""A second look when one view leaves the object's yaw open (the ``active`` and ``two`` views).
+"""Another look while the views so far leave the object's yaw open (the ``active``, ``two`` and ``three`` views).
 
-Known answers: the ambiguity rule on hand-built posteriors; the second camera's geometry; and a committed mug
+Known answers: the ambiguity rule on hand-built posteriors; the turned cameras' geometry; a committed mug
 whose single view is fitted the wrong way round (70 deg off; tuning set, no simulation) that the merged second
-view puts right.
+view puts right; and one that two views still leave open and a third puts right.
 """
 
 from __future__ import annotations
@@ -20,11 +20,11 @@ from catgrasp_drake.station.scenario import CameraSpec, load_scenario, with_inst
 from catgrasp_drake.systems.shape_estimator import (
     LatentShapeEstimator,
     ShapeEstimate,
-    estimate_with_second_view,
+    estimate_with_views,
     failed_estimate,
     yaw_ambiguous,
 )
-from catgrasp_drake.transfer import make_transfer_diagram, second_camera
+from catgrasp_drake.transfer import make_transfer_diagram, turned_camera
 
 
 def _pose(yaw_deg: float) -> np.ndarray:
@@ -58,9 +58,9 @@ def test_a_turned_hypothesis_with_weight_makes_the_view_ambiguous():
     assert not yaw_ambiguous(_posterior([0.0, 90.0], [100.0, np.inf]))
 
 
-def test_the_second_camera_is_the_first_turned_about_its_target():
+def test_a_further_camera_is_the_first_turned_about_its_target():
     first = CameraSpec(look_at_eye=(1.15, -0.45, 0.55), look_at_target=(0.55, 0.0, 0.08))
-    second = second_camera(first, 90.0)
+    second = turned_camera(first, 90.0)
     eye1, eye2, target = (np.array(v) for v in (first.look_at_eye, second.look_at_eye, first.look_at_target))
     assert second.look_at_target == first.look_at_target and second.name == "second_view"
     assert np.linalg.norm(eye2 - target) == pytest.approx(np.linalg.norm(eye1 - target))
@@ -68,14 +68,19 @@ def test_the_second_camera_is_the_first_turned_about_its_target():
     d1, d2 = eye1[:2] - target[:2], eye2[:2] - target[:2]
     turn = np.degrees(np.arctan2(d1[0] * d2[1] - d1[1] * d2[0], d1 @ d2))
     assert turn == pytest.approx(90.0)
+    third = turned_camera(first, -90.0, "third_view")
+    assert third.name == "third_view" and np.allclose(np.array(third.look_at_eye) - target,
+                                                      -(eye2 - target) * [1, 1, 0] + (eye1 - target) * [0, 0, 1])
 
 
 def test_bad_policies_are_refused():
     model = CategoryModel.load(default_model_path("mug"), category="mug")
-    with pytest.raises(InputError, match="second_view"):
-        LatentShapeEstimator(model.space, np.eye(4), second_view="sometimes")
+    with pytest.raises(InputError, match="view_policy"):
+        LatentShapeEstimator(model.space, np.eye(4), view_policy="sometimes")
     with pytest.raises(InputError, match="policy"):
-        estimate_with_second_view(model.space, np.zeros((40, 3)), np.eye(4), policy="sometimes")
+        estimate_with_views(model.space, np.zeros((40, 3)), np.eye(4), policy="sometimes")
+    with pytest.raises(InputError, match=r"extra_views\[0\]"):
+        estimate_with_views(model.space, np.zeros((40, 3)), np.eye(4), extra_views=[np.zeros((40, 3))])
 
 
 @pytest.mark.slow
@@ -92,3 +97,20 @@ def test_a_mug_fitted_the_wrong_way_round_is_put_right_by_the_second_view():
     assert out["single"][0] == 1 and out["single"][1] > 45.0  # one view: the handle put 70 deg off
     assert out["active"][0] == 2 and out["active"][1] < 10.0  # the view was ambiguous: a second look
     assert out["two"] == out["active"]  # the same merged fit
+
+
+@pytest.mark.slow
+def test_a_mug_that_two_views_leave_open_is_put_right_by_the_third():
+    model = CategoryModel.load(default_model_path("mug"), category="mug")
+    base = with_instance(load_scenario("mug_default"), "mug_02", category="mug")
+    scenario, _, _ = trial_placement(base, "mug_02", 0, 4242, noise=True)  # the s25_views probe's mug_02, 0
+    out = {}
+    for view in ("single", "active", "two", "three"):
+        td = make_transfer_diagram(scenario, model, view=view, method="latent")
+        context = td.diagram.CreateDefaultContext()
+        estimate = td.estimator.estimate_now(td.estimator.GetMyMutableContextFromRoot(context))
+        out[view] = (estimate.views, abs(yaw_error_deg(estimate.X_WO, scenario.X_WO())))
+    assert out["single"][0] == 1 and out["single"][1] > 30.0
+    assert out["two"][0] == 2 and out["two"][1] > 90.0  # the handle put on the far side
+    assert out["active"][0] == 3 and out["active"][1] < 10.0  # two views still left it open: a third look
+    assert out["three"] == out["active"]  # the same merged fit
