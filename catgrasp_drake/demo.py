@@ -114,7 +114,8 @@ def run_demo(args) -> int:
     rot_err = np.degrees(rotation_angle(X_est[:3, :3].T @ X_true[:3, :3]))
     _stage("perceive", t["perceive"], f"{result.num_observed_points} object points (depth + label image -> "
            "segmented, cropped, voxelised cloud in W)")
-    _stage("estimate", t["estimate"], f"latent shape + pose (unknown yaw): scale {result.scale:.3f}, pose error "
+    views = f", {result.views_used} camera views" if result.views_used > 1 else ""
+    _stage("estimate", t["estimate"], f"latent shape + pose (unknown yaw{views}): scale {result.scale:.3f}, pose error "
            f"{pos_err:.1f} mm / {rot_err:.1f} deg, confidence {result.confidence:.2f}")
     _stage("regress", t["regress"], "grasp motion predicted, warped by W(x), placed in W")
     _stage("plan", t["plan"], f"IK plan: {result.plan_status}")
