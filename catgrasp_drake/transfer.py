@@ -35,6 +35,7 @@ from pydrake.systems.framework import DiagramBuilder, EventStatus, LeafSystem
 from catgrasp_drake.category_model import CategoryModel
 from catgrasp_drake.core.visibility import camera_on_sphere_position
 from catgrasp_drake.errors import InputError
+from catgrasp_drake.grasping.descriptor import motion_functional_point
 from catgrasp_drake.perception.object_cloud import points_from_cloud
 from catgrasp_drake.planning.model import make_planning_model, object_mesh_path
 from catgrasp_drake.planning.records import PlanParams, hold_plan
@@ -50,11 +51,12 @@ from catgrasp_drake.viz.meshcat_tools import COLORS, draw_cloud, draw_triad
 
 #: "single": one camera, the visibility-aware fit (the benchmark's measure); "active": the same, and further
 #: cameras' views (:data:`EXTRA_VIEW_AZIMUTHS_DEG`) merged in one at a time while the views so far leave the
-#: object's yaw open (``systems.shape_estimator.yaw_ambiguous``; at most three views); "two" / "three": the
-#: first two / three views always; "full": FULL_VIEW_CAMERAS cameras on a ring, merged.
+#: object's yaw open or the grasp's functional part unobserved (``systems.shape_estimator.view_unsure``; at
+#: most three views); "two" / "three": the first two / three views always; "full": FULL_VIEW_CAMERAS cameras
+#: on a ring, merged.
 VIEWS = ("single", "active", "two", "three", "full")
 #: The views with further cameras: the estimator's policy for them, and how many further cameras.
-EXTRA_VIEW_POLICY = {"active": ("ambiguous", 2), "two": ("always", 1), "three": ("always", 2)}
+EXTRA_VIEW_POLICY = {"active": ("unsure", 2), "two": ("always", 1), "three": ("always", 2)}
 #: The further cameras: the first turned this far (deg, counter-clockwise seen from above) about the vertical
 #: through the point it looks at -- same distance, same height -- in the order they are taken. +90 and -90
 #: were compared for the second on the committed mugs with the first, visibility-free merged fit (``python
@@ -262,7 +264,8 @@ def make_transfer_diagram(scenario: Scenario, model: CategoryModel, meshcat: Mes
     inference_kwargs = setup.inference_kwargs | inference_kwargs  # (the caller's options win)
     estimator = builder.AddNamedSystem("shape_estimator", LatentShapeEstimator(
         space, scenario.table.pose.matrix(), yaw_candidates=yaw_candidates,
-        view_policy=EXTRA_VIEW_POLICY.get(view, ("never", 0))[0], **inference_kwargs))
+        view_policy=EXTRA_VIEW_POLICY.get(view, ("never", 0))[0],
+        functional_point_O=motion_functional_point(model.template, model.grasp_anchor_H), **inference_kwargs))
     extra_views = EXTRA_VIEWS[:EXTRA_VIEW_POLICY.get(view, ("never", 0))[1]]
     for name in extra_views:
         builder.Connect(h.object_clouds[f"{name}_view"].GetOutputPort("object_cloud_W"),

@@ -31,6 +31,7 @@ from pydrake.common.value import AbstractValue
 from pydrake.math import RigidTransform
 from pydrake.perception import PointCloud
 from pydrake.systems.framework import EventStatus, LeafSystem
+from scipy.spatial import cKDTree
 
 from catgrasp_drake.core.inference import InferenceResult, camera_positions, infer_latent_pose, model_spacing
 from catgrasp_drake.core.shape_space import ShapeSpace
@@ -49,8 +50,9 @@ AUTO_VOXEL_FACTOR = 1.4
 
 
 #: When the estimator fits the further views (``view_policy``): "never"; "ambiguous": one more view merged in
-#: at a time, while the views so far leave the object's yaw open (:func:`yaw_ambiguous`); "always": every view.
-VIEW_POLICIES = ("never", "ambiguous", "always")
+#: at a time, while the views so far leave the object's yaw open (:func:`yaw_ambiguous`); "unsure": the same,
+#: and also while the grasp's functional part is not in the data (:func:`view_unsure`); "always": every view.
+VIEW_POLICIES = ("never", "ambiguous", "unsure", "always")
 #: The further views' names, in the order they are taken: their ports are ``<name>_cloud_W``, ``<name>_X_WC``.
 EXTRA_VIEWS = ("second", "third")
 #: A view is yaw-ambiguous when a shape hypothesis turned at least AMBIGUOUS_YAW_DEG from the MAP fit (about
@@ -61,6 +63,14 @@ EXTRA_VIEWS = ("second", "third")
 #: it open (session 25, ``benchmarks/results/experiments/s25_views/probe.py``, the same 45 views): 42/45.
 AMBIGUOUS_YAW_DEG = 30.0
 AMBIGUOUS_WEIGHT = 0.05
+#: The functional part of a fit (``functional_part_indices``): its model points within PART_RADIUS_M (m) of the
+#: category's functional point (the canonical trigger or handle centre); observed when at least
+#: PART_SEEN_FRACTION of them have a data point within PART_NEAR_M (m). Chosen on the COMMITTED instances (session
+#: 25, ``benchmarks/results/experiments/s25_views/``): the single-view fits more than 10 deg off (21 mugs, 1 spray
+#: bottle) have at most 0.27 of their part observed, the right ones at least 0.65 but for 3 of 23 mugs.
+PART_RADIUS_M = 0.02
+PART_NEAR_M = 0.01
+PART_SEEN_FRACTION = 0.5
 
 
 def fit_voxel_size(space: ShapeSpace, voxel_size="auto") -> float:
@@ -206,12 +216,46 @@ def yaw_ambiguous(estimate: ShapeEstimate, *, min_weight: float = AMBIGUOUS_WEIG
     return False
 
 
+def functional_part_indices(space: ShapeSpace, point_O, radius: float = PART_RADIUS_M) -> np.ndarray:
+    """Indices of the model points of ``space`` within ``radius`` (m) of ``point_O`` (3,), the category's functional
+    point in the canonical frame (e.g. ``grasping.descriptor.motion_functional_point`` of the canonical motion)."""
+    if not isinstance(space, ShapeSpace):
+        raise InputError(f"space: expected a ShapeSpace, got {type(space).__name__}")
+    point_O = vector3(point_O, "functional point")
+    radius = non_negative(radius, "radius")
+    return np.flatnonzero(np.linalg.norm(space.canonical - point_O, axis=1) <= radius)
+
+
+def part_seen_fraction(estimate: ShapeEstimate, part, near: float = PART_NEAR_M) -> float:
+    """The fraction of the fitted shape's points ``part`` (indices into its model points) with an observed point
+    within ``near`` (m): how much of that part is in the data rather than completed by the fit. 1.0 when
+    ``part`` is empty; 0.0 for a failed estimate."""
+    part = np.asarray(part, dtype=int).reshape(-1)
+    if not estimate.ok or len(estimate.observed_W) == 0:
+        return 0.0
+    if len(part) == 0:
+        return 1.0
+    d, _ = cKDTree(estimate.observed_W).query(estimate.completed_W[part])
+    return float((d <= near).mean())
+
+
+def view_unsure(estimate: ShapeEstimate, part=None, *, min_seen: float = PART_SEEN_FRACTION) -> bool:
+    """Whether another view should be taken: the fit's yaw is ambiguous (:func:`yaw_ambiguous`), or less than
+    ``min_seen`` of its functional part ``part`` (model-point indices, :func:`functional_part_indices`; None:
+    not checked) is observed (:func:`part_seen_fraction`) -- where the grasp goes was completed, not seen."""
+    if yaw_ambiguous(estimate):
+        return True
+    return part is not None and estimate.ok and part_seen_fraction(estimate, part) < min_seen
+
+
 def estimate_with_views(space: ShapeSpace, p_W: np.ndarray, X_WT: np.ndarray, *, camera_W=None, extra_views=(),
-                        policy: str = "ambiguous", **kwargs) -> ShapeEstimate:
+                        policy: str = "ambiguous", part=None, **kwargs) -> ShapeEstimate:
     """:func:`estimate_on_table` of the first view (``p_W``, seen from ``camera_W``), then -- by ``policy``
     (:data:`VIEW_POLICIES`) -- of the views merged with the further ``extra_views``, a sequence of
     ``(points_W (M, 3), camera position (3,) or None)`` in the order they are taken: "ambiguous" merges one
-    more at a time while the fit so far leaves the yaw open; "always" merges every view at once. With every
+    more at a time while the fit so far leaves the yaw open; "unsure" also while less than half the functional
+    part ``part`` (model-point indices, :func:`functional_part_indices`) is observed (:func:`view_unsure`);
+    "always" merges every view at once. With every
     merged view's camera position the merged fit is visibility-aware (a model point is a mixture centre when
     any of those cameras sees it); without them, it is fitted like a full cloud. Views without points are
     skipped. The result's ``views`` counts the views fitted; ``timing["earlier_views"]`` holds the time of
@@ -232,7 +276,12 @@ def estimate_with_views(space: ShapeSpace, p_W: np.ndarray, X_WT: np.ndarray, *,
         return fit
     earlier = 0.0
     n = 1
-    while n < len(views) and (policy == "always" or yaw_ambiguous(fit)):
+    def look_again(fit):
+        if policy == "always":
+            return True
+        return view_unsure(fit, part) if policy == "unsure" else yaw_ambiguous(fit)
+
+    while n < len(views) and look_again(fit):
         earlier += float(sum(v for v in fit.timing.values() if isinstance(v, (int, float))))
         n = len(views) if policy == "always" else n + 1
         merged = np.vstack([p for p, _ in views[:n]])
@@ -296,11 +345,14 @@ class LatentShapeEstimator(LeafSystem):
     extra keyword arguments for ``infer_latent_pose`` (e.g.
     ``**core.inference.LEGACY_SEARCH`` with ``voxel_size=None``: the settings
     before issue 17); ``view_policy`` (:data:`VIEW_POLICIES`, "never" by
-    default): when the further cameras' clouds are merged in.
+    default): when the further cameras' clouds are merged in;
+    ``functional_point_O`` (3,) m, canonical frame: the category's functional
+    point, whose part of the fit the "unsure" policy wants observed (None:
+    the yaw's ambiguity alone decides).
     """
 
     def __init__(self, space: ShapeSpace, X_WT, *, yaw_candidates=8, voxel_size="auto", view_policy: str = "never",
-                 **inference_kwargs):
+                 functional_point_O=None, **inference_kwargs):
         super().__init__()
         if not isinstance(space, ShapeSpace):
             raise InputError(f"space: expected a ShapeSpace, got {type(space).__name__}")
@@ -312,6 +364,7 @@ class LatentShapeEstimator(LeafSystem):
         if view_policy not in VIEW_POLICIES:
             raise InputError(f"view_policy: expected one of {VIEW_POLICIES}, got {view_policy!r}")
         self._view_policy = view_policy
+        self._part = None if functional_point_O is None else functional_part_indices(space, functional_point_O)
         self._cloud_in = self.DeclareAbstractInputPort("object_cloud_W", AbstractValue.Make(PointCloud()))
         self._camera_in = self.DeclareAbstractInputPort("X_WC", AbstractValue.Make(RigidTransform()))
         self._extra_in = [(self.DeclareAbstractInputPort(f"{name}_cloud_W", AbstractValue.Make(PointCloud())),
@@ -361,8 +414,8 @@ class LatentShapeEstimator(LeafSystem):
             extra.append((points_from_cloud(cloud_in.Eval(context)),
                           camera_in.Eval(context).translation() if camera_in.HasValue(context) else None))
         return estimate_with_views(self._space, p_W, self._X_WT, camera_W=camera_W, extra_views=extra,
-                                   policy=self._view_policy, yaw_candidates=self._yaws, voxel_size=self._voxel,
-                                   **self._kwargs)
+                                   policy=self._view_policy, part=self._part, yaw_candidates=self._yaws,
+                                   voxel_size=self._voxel, **self._kwargs)
 
     def set_estimate(self, context, estimate: ShapeEstimate) -> None:
         """Write ``estimate`` into this system's state in ``context``."""

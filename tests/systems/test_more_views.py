@@ -22,6 +22,9 @@ from catgrasp_drake.systems.shape_estimator import (
     ShapeEstimate,
     estimate_with_views,
     failed_estimate,
+    functional_part_indices,
+    part_seen_fraction,
+    view_unsure,
     yaw_ambiguous,
 )
 from catgrasp_drake.transfer import make_transfer_diagram, turned_camera
@@ -114,3 +117,22 @@ def test_a_mug_that_two_views_leave_open_is_put_right_by_the_third():
     assert out["two"][0] == 2 and out["two"][1] > 90.0  # the handle put on the far side
     assert out["active"][0] == 3 and out["active"][1] < 10.0  # two views still left it open: a third look
     assert out["three"] == out["active"]  # the same merged fit
+
+
+def test_the_functional_part_is_seen_where_the_data_covers_it():
+    model = CategoryModel.load(default_model_path("mug"), category="mug")
+    space = model.space
+    point_O = space.canonical[np.argmax(space.canonical[:, 1])]  # the point furthest along +y (the handle)
+    part = functional_part_indices(space, point_O, radius=0.02)
+    assert len(part) > 5 and np.all(np.linalg.norm(space.canonical[part] - point_O, axis=1) <= 0.02)
+    shape = space.canonical  # a fit that is the canonical shape, at the identity pose
+    base = dataclasses.replace(failed_estimate(space.q, ""), ok=True, status="ok", completed_W=shape)
+    # the data is the whole shape: all of the part seen; the shape without the part's neighbourhood: none of it
+    whole = dataclasses.replace(base, observed_W=shape)
+    far = np.linalg.norm(shape - point_O, axis=1) > 0.02 + 0.011
+    hidden = dataclasses.replace(base, observed_W=shape[far])
+    assert part_seen_fraction(whole, part) == 1.0
+    assert part_seen_fraction(hidden, part) == 0.0
+    assert not view_unsure(whole, part) and view_unsure(hidden, part)
+    assert not view_unsure(hidden)  # no part given: only the yaw's ambiguity counts
+    assert part_seen_fraction(whole, []) == 1.0 and part_seen_fraction(failed_estimate(space.q, ""), part) == 0.0
