@@ -290,8 +290,8 @@ def _difference_rows(records: Sequence[dict]) -> list[list[str]]:
                 if not latent or not other:
                     continue
                 pairs = pair_records(latent, other, key=METHOD_PAIR_KEY)
-                if not len(pairs):
-                    continue
+                if not len(pairs) or (len(cats) > 1 and set(pairs.field("category")) != set(cats)):
+                    continue  # (a pooled row needs pairs in every pooled category)
                 a, b = pairs.outcomes("functional")
                 strata = pairs.field("category") if len(cats) > 1 else None
                 d = paired_bootstrap(pairs.field("instance"), a, b, strata=strata,

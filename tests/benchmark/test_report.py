@@ -167,6 +167,13 @@ def test_full_tables_structure(records):
     assert "**drill + spray bottle, single view** (bootstrap stratified by category)" in test_part
     assert "drill + spray bottle" not in ycb_part.split("### Physics")[0]  # ycb has no spray bottles
     assert "Latent minus baseline" in test_part and "| drill + spray bottle | single | rigid |" in test_part
+    # a view whose baselines ran on drills only: a drill row, no pooled "drill + spray bottle" row
+    drill_full = [r for r in records if not (r["view"] == "full" and r["category"] == "spray_bottle"
+                                             and r["method"] != "latent")]
+    text_drill_full = benchmark_tables(drill_full).split("### Split `test`")[1].split("### Split `ycb`")[0]
+    assert "| drill | full | rigid |" in text_drill_full
+    assert "| drill + spray bottle | full | rigid |" not in text_drill_full
+    assert "| drill + spray bottle | full | rigid |" in test_part
     assert "### Physics sensitivity" in text and "`friction_0.5`" in text
     assert "### Failure reasons" in text and "`wrong_part`" in text
     assert "### Cost" in text and f"| all | all | {len(records)} |" in text
