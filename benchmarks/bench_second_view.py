@@ -8,7 +8,7 @@ placed ``--placements`` times by the benchmark's seeded placement
 (``benchmark.runner.trial_placement``), seen by the station camera with depth
 noise and fitted as the ``latent`` method does (3 shape hypotheses, 8 yaw
 starts, the visibility-aware fit). A second camera
-(``transfer.turned_camera``: the first turned by each of ``--azimuths`` about
+(``transfer.observe(turn_deg=...)``: the first turned by each of ``--azimuths`` about
 the vertical through its target) sees it too, and the two views are fitted
 merged, visibility-aware for both cameras (``--no-visibility``: like a full
 cloud; ``systems.shape_estimator.estimate_with_views``). Printed per
@@ -44,7 +44,7 @@ from catgrasp_drake.demo import default_model_path  # noqa: E402
 from catgrasp_drake.prediction import ESTIMATORS  # noqa: E402
 from catgrasp_drake.station.scenario import load_scenario, with_instance  # noqa: E402
 from catgrasp_drake.systems.shape_estimator import estimate_on_table, yaw_ambiguous  # noqa: E402
-from catgrasp_drake.transfer import observe, turned_camera  # noqa: E402
+from catgrasp_drake.transfer import observe  # noqa: E402
 
 YAW_OK_DEG = 10.0
 
@@ -77,7 +77,7 @@ def main(argv=None) -> int:
                 t_one.append(time.perf_counter() - t0)
                 right = abs(yaw_error_deg(first.X_WO, X_WO)) <= YAW_OK_DEG
                 for az in args.azimuths:
-                    p2, camera2_W = observe(scenario.replace(cameras=(turned_camera(scenario.cameras[0], az),)))
+                    p2, camera2_W = observe(scenario, turn_deg=az)
                     cameras = None if args.no_visibility else np.vstack([camera_W, camera2_W])
                     t0 = time.perf_counter()
                     both = estimate_on_table(model.space, np.vstack([p_W, p2]), X_WT, camera_W=cameras,

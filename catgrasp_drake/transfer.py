@@ -424,15 +424,24 @@ def run_transfer(td: TransferDiagram, *, record_html=None, return_context: bool 
     return (result, context) if return_context else result
 
 
-def observe(scenario: Scenario, view: str = "single", camera: str | None = None):
+def observe(scenario: Scenario, view: str = "single", camera: str | None = None, *, turn_deg: float = 0.0):
     """The object's cloud as the station's camera(s) see it: ``(points_W (N, 3), camera position or None)``.
 
     ``view`` "single": the scenario's camera (its position is returned for
-    the visibility-aware fit); "full": ``FULL_VIEW_CAMERAS`` ring cameras,
+    the visibility-aware fit), turned ``turn_deg`` about the vertical through
+    its target when not 0 (:func:`turned_camera`: the further views of
+    ``EXTRA_VIEW_AZIMUTHS_DEG``); "full": ``FULL_VIEW_CAMERAS`` ring cameras,
     clouds merged, no camera position. Renders once, simulates nothing.
     """
     if view not in ("single", "full"):
         raise InputError(f"view: expected 'single' or 'full', got {view!r}")
+    if turn_deg:
+        if view != "single":
+            raise InputError(f"turn_deg: only the single view's camera can be turned, not the {view!r} view's")
+        first = [c for c in scenario.cameras if c.name == (camera or scenario.cameras[0].name)]
+        if not first:
+            raise InputError(f"camera {camera!r} not in scenario {scenario.name!r}")
+        scenario, camera = scenario.replace(cameras=(turned_camera(first[0], turn_deg),)), None
     if view == "full":
         scenario = scenario.replace(cameras=ring_cameras(scenario))
     station = make_station(scenario)

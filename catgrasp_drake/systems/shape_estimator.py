@@ -251,47 +251,62 @@ def view_unsure(estimate: ShapeEstimate, part=None, *, min_seen: float = PART_SE
 def estimate_with_views(space: ShapeSpace, p_W: np.ndarray, X_WT: np.ndarray, *, camera_W=None, extra_views=(),
                         policy: str = "ambiguous", part=None, **kwargs) -> ShapeEstimate:
     """:func:`estimate_on_table` of the first view (``p_W``, seen from ``camera_W``), then -- by ``policy``
-    (:data:`VIEW_POLICIES`) -- of the views merged with the further ``extra_views``, a sequence of
-    ``(points_W (M, 3), camera position (3,) or None)`` in the order they are taken: "ambiguous" merges one
-    more at a time while the fit so far leaves the yaw open; "unsure" also while less than half the functional
-    part ``part`` (model-point indices, :func:`functional_part_indices`) is observed (:func:`view_unsure`);
-    "always" merges every view at once. With every
-    merged view's camera position the merged fit is visibility-aware (a model point is a mixture centre when
-    any of those cameras sees it); without them, it is fitted like a full cloud. Views without points are
-    skipped. The result's ``views`` counts the views fitted; ``timing["earlier_views"]`` holds the time of
-    the fits before the last (s)."""
+    (:data:`VIEW_POLICIES`) -- of the views merged with the further ``extra_views``, in the order they are
+    taken: "ambiguous" merges one more at a time while the fit so far leaves the yaw open; "unsure" also while
+    less than half the functional part ``part`` (model-point indices, :func:`functional_part_indices`) is
+    observed (:func:`view_unsure`); "always" merges every view at once. Each further view is a pair
+    ``(points_W (M, 3), camera position (3,) or None)``, or a callable returning one, called only when the view
+    is taken (a camera rendered only when needed). With every merged view's camera position the merged fit is
+    visibility-aware (a model point is a mixture centre when any of those cameras sees it); without them, it
+    is fitted like a full cloud. Views without points are skipped. The result's ``views`` counts the views
+    fitted; ``timing["earlier_views"]`` holds the time of the fits before the last (s)."""
     if policy not in VIEW_POLICIES:
         raise InputError(f"view policy: expected one of {VIEW_POLICIES}, got {policy!r}")
+    further = list(extra_views)
+    for k, view in enumerate(further):
+        if not callable(view):
+            further[k] = _view_pair(view, k)  # (checked now; a callable's view when it is taken)
     views = [(np.asarray(p_W, float).reshape(-1, 3), camera_W)]
-    for k, view in enumerate(extra_views):
-        try:
-            points, camera = view
-        except (TypeError, ValueError):
-            raise InputError(f"extra_views[{k}]: expected a pair (points_W, camera position or None)") from None
-        points = np.zeros((0, 3)) if points is None else real_array(points, f"extra_views[{k}] points", "(M, 3)")
-        if points.size:
-            views.append((points.reshape(-1, 3), camera))
     fit = estimate_on_table(space, views[0][0], X_WT, camera_W=camera_W, **kwargs)
-    if policy == "never" or len(views) == 1:
+    if policy == "never":
         return fit
-    earlier = 0.0
-    n = 1
-    def look_again(fit):
-        if policy == "always":
-            return True
-        return view_unsure(fit, part) if policy == "unsure" else yaw_ambiguous(fit)
 
-    while n < len(views) and look_again(fit):
+    def taken(k: int):  # the k-th further view, or None when it has no points
+        view = _view_pair(further[k](), k) if callable(further[k]) else further[k]
+        return view if view[0].size else None
+
+    earlier, k = 0.0, 0
+    while k < len(further):
+        if policy == "always":
+            new = [v for v in (taken(j) for j in range(k, len(further))) if v is not None]
+            k = len(further)
+        elif (view_unsure(fit, part) if policy == "unsure" else yaw_ambiguous(fit)):
+            new = [v for v in (taken(k),) if v is not None]
+            k += 1
+        else:
+            break
+        if not new:
+            continue
         earlier += float(sum(v for v in fit.timing.values() if isinstance(v, (int, float))))
-        n = len(views) if policy == "always" else n + 1
-        merged = np.vstack([p for p, _ in views[:n]])
+        views += new
         cameras = None
-        if all(c is not None for _, c in views[:n]):
-            cameras = np.vstack([camera_positions(c) for _, c in views[:n]])
-        fit = estimate_on_table(space, merged, X_WT, camera_W=cameras, **kwargs)
+        if all(c is not None for _, c in views):
+            cameras = np.vstack([camera_positions(c) for _, c in views])
+        fit = estimate_on_table(space, np.vstack([p for p, _ in views]), X_WT, camera_W=cameras, **kwargs)
+        n = len(views)
         fit = dataclasses.replace(fit, views=n, timing=dict(fit.timing) | {"earlier_views": earlier},
                                   hypotheses=tuple(dataclasses.replace(h, views=n) for h in fit.hypotheses))
     return fit
+
+
+def _view_pair(view, k: int) -> tuple:
+    """Further view ``k`` as ``(points (M, 3) float, camera position or None)``, or InputError."""
+    try:
+        points, camera = view
+    except (TypeError, ValueError):
+        raise InputError(f"extra_views[{k}]: expected a pair (points_W, camera position or None)") from None
+    points = np.zeros((0, 3)) if points is None else real_array(points, f"extra_views[{k}] points", "(M, 3)")
+    return points.reshape(-1, 3), camera
 
 
 class LatentShapeEstimator(LeafSystem):
@@ -407,12 +422,15 @@ class LatentShapeEstimator(LeafSystem):
         camera_W = None
         if self._camera_in.HasValue(context):
             camera_W = self._camera_in.Eval(context).translation()
+        def view(cloud_in, camera_in):  # rendered only if the policy takes it
+            return lambda: (points_from_cloud(cloud_in.Eval(context)),
+                            camera_in.Eval(context).translation() if camera_in.HasValue(context) else None)
+
         extra = []
         for cloud_in, camera_in in self._extra_in:
             if not cloud_in.HasValue(context):
                 break  # the views are taken in order
-            extra.append((points_from_cloud(cloud_in.Eval(context)),
-                          camera_in.Eval(context).translation() if camera_in.HasValue(context) else None))
+            extra.append(view(cloud_in, camera_in))
         return estimate_with_views(self._space, p_W, self._X_WT, camera_W=camera_W, extra_views=extra,
                                    policy=self._view_policy, part=self._part, yaw_candidates=self._yaws,
                                    voxel_size=self._voxel, **self._kwargs)

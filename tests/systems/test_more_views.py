@@ -16,6 +16,7 @@ from catgrasp_drake.benchmark.runner import trial_placement, yaw_error_deg
 from catgrasp_drake.category_model import CategoryModel
 from catgrasp_drake.demo import default_model_path
 from catgrasp_drake.errors import InputError
+from catgrasp_drake.grasping.descriptor import motion_functional_point
 from catgrasp_drake.station.scenario import CameraSpec, load_scenario, with_instance
 from catgrasp_drake.systems.shape_estimator import (
     LatentShapeEstimator,
@@ -27,7 +28,7 @@ from catgrasp_drake.systems.shape_estimator import (
     view_unsure,
     yaw_ambiguous,
 )
-from catgrasp_drake.transfer import make_transfer_diagram, turned_camera
+from catgrasp_drake.transfer import make_transfer_diagram, observe, turned_camera
 
 
 def _pose(yaw_deg: float) -> np.ndarray:
@@ -136,3 +137,26 @@ def test_the_functional_part_is_seen_where_the_data_covers_it():
     assert not view_unsure(whole, part) and view_unsure(hidden, part)
     assert not view_unsure(hidden)  # no part given: only the yaw's ambiguity counts
     assert part_seen_fraction(whole, []) == 1.0 and part_seen_fraction(failed_estimate(space.q, ""), part) == 0.0
+
+
+def test_a_further_view_is_taken_only_when_the_policy_needs_it():
+    model = CategoryModel.load(default_model_path("mug"), category="mug")
+    base = with_instance(load_scenario("mug_default"), "mug_00", category="mug")
+    scenario, _, _ = trial_placement(base, "mug_00", 2, 4242, noise=True)  # handle in view, yaw right, not unsure
+    p_W, camera_W = observe(scenario)
+    taken = []
+
+    def second():  # a camera that renders only when called
+        taken.append(1)
+        return observe(scenario, turn_deg=90.0)
+
+    kw = {"camera_W": camera_W, "yaw_candidates": 8, "hypotheses": 3}
+    X_WT = scenario.table.pose.matrix()
+    part = functional_part_indices(model.space, motion_functional_point(model.template, model.grasp_anchor_H))
+    sure = estimate_with_views(model.space, p_W, X_WT, extra_views=[second], policy="unsure", part=part, **kw)
+    assert sure.views == 1 and taken == []
+    both = estimate_with_views(model.space, p_W, X_WT, extra_views=[second], policy="always", part=part, **kw)
+    assert both.views == 2 and taken == [1]
+    given = estimate_with_views(model.space, p_W, X_WT, extra_views=[observe(scenario, turn_deg=90.0)],
+                                policy="always", **kw)
+    assert np.array_equal(given.X_WO, both.X_WO) and given.energy == both.energy

@@ -36,7 +36,7 @@ from catgrasp_drake.systems.shape_estimator import (  # noqa: E402
     part_seen_fraction,
     yaw_ambiguous,
 )
-from catgrasp_drake.transfer import EXTRA_VIEW_AZIMUTHS_DEG, observe, turned_camera  # noqa: E402
+from catgrasp_drake.transfer import EXTRA_VIEW_AZIMUTHS_DEG, observe  # noqa: E402
 
 OK_DEG = 10.0
 
@@ -69,8 +69,7 @@ def main(argv=None) -> int:
         base = with_instance(load_scenario(f"{c}_default"), name, category=c)
         for k in range(args.placements):
             sc, _, _ = trial_placement(base, name, k, args.seed, noise=True)
-            views = [observe(sc)] + [observe(sc.replace(cameras=(turned_camera(sc.cameras[0], az),)))
-                                     for az in EXTRA_VIEW_AZIMUTHS_DEG]
+            views = [observe(sc, turn_deg=az) for az in (0.0,) + EXTRA_VIEW_AZIMUTHS_DEG]
             row = {"instance": name, "placement": k}
             for n in (1, 2, 3):
                 p = np.vstack([v[0] for v in views[:n]])

@@ -30,7 +30,7 @@ from catgrasp_drake.grasping.descriptor import motion_functional_point  # noqa: 
 from catgrasp_drake.prediction import ESTIMATORS, predict_motion  # noqa: E402
 from catgrasp_drake.station.scenario import load_scenario, with_instance  # noqa: E402
 from catgrasp_drake.systems.shape_estimator import estimate_on_table  # noqa: E402
-from catgrasp_drake.transfer import EXTRA_VIEW_AZIMUTHS_DEG, observe, turned_camera  # noqa: E402
+from catgrasp_drake.transfer import EXTRA_VIEW_AZIMUTHS_DEG, observe  # noqa: E402
 
 
 def main(argv=None) -> int:
@@ -51,8 +51,7 @@ def main(argv=None) -> int:
         for k in range(args.placements):
             scenario, _, _ = trial_placement(base, name, k, args.seed, noise=True)
             X_WT, X_WO = scenario.table.pose.matrix(), scenario.X_WO()
-            views = [observe(scenario)] + [observe(scenario.replace(cameras=(turned_camera(scenario.cameras[0], az),)))
-                                           for az in EXTRA_VIEW_AZIMUTHS_DEG]
+            views = [observe(scenario, turn_deg=az) for az in (0.0,) + EXTRA_VIEW_AZIMUTHS_DEG]
             row = {"instance": name, "placement": k}
             for label, n in (("one", 1), ("three", 3)):
                 p = np.vstack([v[0] for v in views[:n]])

@@ -30,7 +30,7 @@ from catgrasp_drake.demo import default_model_path  # noqa: E402
 from catgrasp_drake.prediction import ESTIMATORS  # noqa: E402
 from catgrasp_drake.station.scenario import load_scenario, with_instance  # noqa: E402
 from catgrasp_drake.systems.shape_estimator import estimate_on_table, yaw_ambiguous  # noqa: E402
-from catgrasp_drake.transfer import observe, turned_camera  # noqa: E402
+from catgrasp_drake.transfer import observe  # noqa: E402
 
 AZIMUTHS = (0.0, 90.0, -90.0, 180.0)
 OK_DEG = 10.0
@@ -52,18 +52,13 @@ def main(argv=None) -> int:
         for k in range(args.placements):
             scenario, _, _ = trial_placement(base, name, k, args.seed, noise=True)
             X_WT, X_WO = scenario.table.pose.matrix(), scenario.X_WO()
-            views = []
-            for az in AZIMUTHS:
-                sc = scenario if az == 0.0 else scenario.replace(cameras=(turned_camera(scenario.cameras[0], az),))
-                views.append(observe(sc))
+            views = [observe(scenario, turn_deg=az) for az in AZIMUTHS]
             row = {"instance": name, "placement": k}
-            fits = {}
             for n in range(1, len(AZIMUTHS) + 1):
                 p = np.vstack([v[0] for v in views[:n]])
                 cams = np.vstack([v[1] for v in views[:n]])
                 t0 = time.perf_counter()
                 e = estimate_on_table(model.space, p, X_WT, camera_W=cams, yaw_candidates=8, hypotheses=hyp)
-                fits[n] = e
                 row[f"vis{n}"] = round(yaw_error_deg(e.X_WO, X_WO), 1)
                 row[f"vis{n}_amb"] = bool(yaw_ambiguous(e))
                 row[f"vis{n}_s"] = round(time.perf_counter() - t0, 3)
