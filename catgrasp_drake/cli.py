@@ -547,6 +547,7 @@ def _cmd_search_grasp(args) -> int:
     import yaml
 
     from catgrasp_drake.core.fileio import atomic_write_text
+    from catgrasp_drake.data.dataset import imported_object
     from catgrasp_drake.grasp_search import apply_variation_to_spec, search_grasp
     from catgrasp_drake.grasping.robustness import Robustness
     from catgrasp_drake.grasping.search import CemParams
@@ -555,8 +556,17 @@ def _cmd_search_grasp(args) -> int:
     from catgrasp_drake.station.variation import VARIATION_NAMES, VARIATION_SCALE
 
     instances = _check_category(args.category)
-    chosen = args.instances or instances[::2]
+    object_dirs = {}
+    for directory in args.objects or ():
+        category, name = imported_object(directory)
+        if category != args.category:
+            raise InputError(f"--objects: {directory} is a {category}, not a {args.category}")
+        if name in object_dirs or name in instances:
+            raise InputError(f"--objects: {directory}: the name {name!r} is already taken; re-import it with --name")
+        object_dirs[name] = directory
+    chosen = args.instances or ([] if object_dirs else instances[::2])
     _check_instances(args.category, chosen)
+    chosen = [*chosen, *object_dirs]
     std = VARIATION_SCALE.copy()
     for name in args.freeze or ():
         if name not in VARIATION_NAMES:
@@ -571,7 +581,8 @@ def _cmd_search_grasp(args) -> int:
                                                                  elite=args.elite, seed=args.seed),
                           robustness=Robustness(perturbations=args.perturbations, seed=args.seed,
                                                 mass_scale=tuple(args.mass_scale)), search_std=std,
-                          grasp_file=args.grasp, cache_dir=args.cache, workers=args.workers, ray=args.ray,
+                          grasp_file=args.grasp, object_dirs=object_dirs, cache_dir=args.cache, workers=args.workers,
+                          ray=args.ray,
                           progress=lambda k, X, s: bar(f"rounds (best so far {max(s):.2f})", k + 1, total))
     out = Path(args.out or f"out/grasp_search/{args.category}")
     spec = yaml.safe_load(grasp_file.read_text())
@@ -827,7 +838,11 @@ def build_parser() -> argparse.ArgumentParser:
                        "over pose and finger variations, scored by perturbed simulated trials)")
     g.add_argument("--category", required=True, help="drill, spray_bottle or mug")
     g.add_argument("--instances", nargs="+", default=None,
-                   help="committed instances to search on (default: every other one; the rest stay for checking)")
+                   help="committed instances to search on (default: every other one; the rest stay for checking; "
+                        "none when --objects is given)")
+    g.add_argument("--objects", nargs="+", default=None, metavar="DIR",
+                   help="imported objects of the category to search on too (catgrasp import-object; e.g. a stress "
+                        "copy out/benchmark/data/stress/spray_bottle/spray_bottle_01_large)")
     g.add_argument("--grasp", default=None,
                    help="the grasp file to start from (default: models/grasps/<category>_handwritten.yaml)")
     g.add_argument("--rounds", type=_int_at_least(1, 50), default=3)

@@ -8,7 +8,8 @@ trials on the search instances, each under a seeded perturbation of the
 object's pose, friction and mass. Trials are tasks of
 :func:`catgrasp_drake.runner.run_tasks`: cached (an interrupted search
 resumes), on local workers or Ray. The search runs on the committed
-instances only -- they are what may be tuned on.
+instances, or on imported objects (your own scan; a stretched copy of a committed instance, which is still
+tuned-on data). The project's own grasps are searched on committed instances and their stretched copies only.
 
 ``apply_variation_to_spec`` turns the best variation back into a
 hand-written grasp file (position, fingers, palm, posture overrides), so the
@@ -25,6 +26,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from catgrasp_drake.core.fileio import file_sha256
+from catgrasp_drake.data.dataset import object_files_sha256
 from catgrasp_drake.errors import InputError
 from catgrasp_drake.grasping.constraints import load_constraint
 from catgrasp_drake.grasping.robustness import Robustness, perturbation, trial_score
@@ -42,11 +44,11 @@ def search_trial_task(spec: dict) -> dict:
     from catgrasp_drake.station.variation import vary_motion
     from catgrasp_drake.trial import run_perturbed_trial
 
-    category, instance = spec["category"], spec["instance"]
-    motion = load_handwritten_motion(category, instance, spec.get("grasp_file"))
-    motion = vary_motion(motion, category, instance, spec["variation"])
-    return run_perturbed_trial(with_instance(load_scenario(f"{category}_default"), instance), motion,
-                               spec["perturbation"])
+    category, instance, model_dir = spec["category"], spec["instance"], spec.get("model_dir")
+    motion = load_handwritten_motion(category, instance, spec.get("grasp_file"), annotations_dir=model_dir)
+    motion = vary_motion(motion, category, instance, spec["variation"], annotations_dir=model_dir)
+    scenario = with_instance(load_scenario(f"{category}_default"), instance, category=category, model_dir=model_dir)
+    return run_perturbed_trial(scenario, motion, spec["perturbation"])
 
 
 @dataclass
@@ -67,9 +69,14 @@ class GraspSearchResult:
 
 
 def search_grasp(category: str, instances, *, cem: CemParams = CemParams(), robustness: Robustness = Robustness(),
-                 search_std=None, grasp_file: str | None = None, cache_dir: str | None = "out/grasp_search/cache",
-                 workers: int | None = None, ray: str | None = None, progress=None) -> GraspSearchResult:
+                 search_std=None, grasp_file: str | None = None, object_dirs=None,
+                 cache_dir: str | None = "out/grasp_search/cache", workers: int | None = None, ray: str | None = None,
+                 progress=None) -> GraspSearchResult:
     """Cross-entropy search of ``category``'s hand-written grasp (module docstring) on ``instances``.
+
+    ``object_dirs``: ``{instance: directory}`` for instances that are imported objects (``catgrasp
+    import-object``, a stretched copy of the stress split) rather than committed ones; their files are part of
+    their trials' cache key.
 
     ``search_std``: the initial spread per variation parameter (default
     :data:`~catgrasp_drake.station.variation.VARIATION_SCALE`; 0 freezes a
@@ -83,6 +90,9 @@ def search_grasp(category: str, instances, *, cem: CemParams = CemParams(), robu
     instances = tuple(instances)
     if not instances:
         raise InputError("instances: the search needs at least one instance")
+    object_dirs = dict(object_dirs or {})
+    where = {i: {"model_dir": str(object_dirs[i]), "object_sha256": object_files_sha256(object_dirs[i], i)}
+             for i in instances if i in object_dirs}
     std = VARIATION_SCALE if search_std is None else np.asarray(search_std, float)
     root = Path(__file__).resolve().parents[1]
     # what a search trial runs: the trial's code, this module's task and the grasp files it varies
@@ -94,8 +104,8 @@ def search_grasp(category: str, instances, *, cem: CemParams = CemParams(), robu
     t0 = time.perf_counter()
 
     def evaluate(X: np.ndarray) -> np.ndarray:
-        specs = [start | {"task": TASK, "category": category, "instance": i, "perturbation": p,
-                          "variation": [round(float(x), 6) for x in v]}
+        specs = [start | where.get(i, {}) | {"task": TASK, "category": category, "instance": i, "perturbation": p,
+                                             "variation": [round(float(x), 6) for x in v]}
                  for v in X for i, p in perturbations]
         outcomes = run_tasks(search_trial_task, specs, cache_dir=cache_dir, code_version=version, workers=workers,
                              ray_address=ray)

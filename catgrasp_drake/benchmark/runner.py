@@ -40,7 +40,6 @@ interrupted run resumes), and the records (JSON lines) are written with
 from __future__ import annotations
 
 import functools
-import hashlib
 import math
 import os
 import time
@@ -52,7 +51,7 @@ import numpy as np
 
 from catgrasp_drake.core.fileio import atomic_write_text, file_sha256
 from catgrasp_drake.core.visibility import camera_on_sphere_position
-from catgrasp_drake.data.dataset import CATEGORIES
+from catgrasp_drake.data.dataset import CATEGORIES, object_files_sha256
 from catgrasp_drake.errors import InputError
 from catgrasp_drake.transfer import VIEWS
 
@@ -473,8 +472,7 @@ def trial_specs(config: BenchmarkConfig, model_paths: dict[str, str] | None = No
         path, sha = models[obj.category]
         # an imported object may be re-imported into the same directory (and a YCB scan prepared again by a
         # changed import): its files are part of the cache key
-        own = ({"object_sha256": hashlib.sha256(b"".join(file_sha256(Path(obj.model_dir) / f).encode() for f in (
-            f"{obj.instance}.obj", f"{obj.instance}.sdf", "annotations.json"))).hexdigest()}
+        own = ({"object_sha256": object_files_sha256(obj.model_dir, obj.instance)}
                if obj.split in ("objects", "ycb", "ais", "stress") else {})
         for view in config.views:
             for trial in range(placements):

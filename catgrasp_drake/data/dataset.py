@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
-from catgrasp_drake.core.fileio import atomic_write_bytes, atomic_write_text
+from catgrasp_drake.core.fileio import atomic_write_bytes, atomic_write_text, file_sha256
 from catgrasp_drake.data.categories import DENSITY_KG_M3, GeneratedInstance, generate_instance
 from catgrasp_drake.data.meshes import read_mesh
 from catgrasp_drake.data.pointclouds import full_cloud
@@ -124,6 +124,15 @@ def imported_object(directory) -> tuple[str, str]:
     if not (directory / f"{instance}.sdf").is_file():
         raise ModelFileError(f"{directory}: {instance}.sdf is missing")
     return category, instance
+
+
+def object_files_sha256(directory, instance: str) -> str:
+    """One sha256 over an object directory's mesh, SDF and annotations (``<instance>.obj``, ``<instance>.sdf``,
+    ``annotations.json``): a cache key for trials on an object outside the code's fingerprint (an imported
+    object may be re-imported into the same directory)."""
+    directory = Path(directory)
+    return hashlib.sha256(b"".join(file_sha256(directory / f).encode() for f in (
+        f"{instance}.obj", f"{instance}.sdf", "annotations.json"))).hexdigest()
 
 
 def load_mesh(category: str, instance: str) -> trimesh.Trimesh:
