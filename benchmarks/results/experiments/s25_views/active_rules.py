@@ -18,25 +18,21 @@ import json
 import sys
 from pathlib import Path
 
-import numpy as np
-
 sys.path.insert(0, str(Path(__file__).resolve().parents[4]))
 
-from catgrasp_drake.benchmark.runner import trial_placement, yaw_error_deg  # noqa: E402
+from probe import committed_views, merged_fit  # noqa: E402  (this folder's probe.py)
+
+from catgrasp_drake.benchmark.runner import yaw_error_deg  # noqa: E402
 from catgrasp_drake.category_model import CategoryModel  # noqa: E402
 from catgrasp_drake.core.fileio import atomic_write_text  # noqa: E402
-from catgrasp_drake.data.dataset import INSTANCE_COUNTS, instance_name  # noqa: E402
 from catgrasp_drake.demo import default_model_path  # noqa: E402
 from catgrasp_drake.grasping.descriptor import motion_functional_point  # noqa: E402
-from catgrasp_drake.prediction import ESTIMATORS  # noqa: E402
-from catgrasp_drake.station.scenario import load_scenario, with_instance  # noqa: E402
 from catgrasp_drake.systems.shape_estimator import (  # noqa: E402
-    estimate_on_table,
     functional_part_indices,
     part_seen_fraction,
     yaw_ambiguous,
 )
-from catgrasp_drake.transfer import EXTRA_VIEW_AZIMUTHS_DEG, observe  # noqa: E402
+from catgrasp_drake.transfer import EXTRA_VIEW_AZIMUTHS_DEG  # noqa: E402
 
 OK_DEG = 10.0
 
@@ -64,23 +60,15 @@ def main(argv=None) -> int:
     model = CategoryModel.load(default_model_path(c), category=c)
     part = functional_part_indices(model.space, motion_functional_point(model.template, model.grasp_anchor_H))
     rows = []
-    for i in range(INSTANCE_COUNTS[c]):
-        name = instance_name(c, i)
-        base = with_instance(load_scenario(f"{c}_default"), name, category=c)
-        for k in range(args.placements):
-            sc, _, _ = trial_placement(base, name, k, args.seed, noise=True)
-            views = [observe(sc, turn_deg=az) for az in (0.0,) + EXTRA_VIEW_AZIMUTHS_DEG]
-            row = {"instance": name, "placement": k}
-            for n in (1, 2, 3):
-                p = np.vstack([v[0] for v in views[:n]])
-                cams = np.vstack([v[1] for v in views[:n]])
-                e = estimate_on_table(model.space, p, sc.table.pose.matrix(), camera_W=cams, yaw_candidates=8,
-                                      hypotheses=ESTIMATORS["latent"].hypotheses)
-                row[f"yaw{n}"] = round(yaw_error_deg(e.X_WO, sc.X_WO()), 1)
-                row[f"amb{n}"] = bool(yaw_ambiguous(e))
-                row[f"seen{n}"] = round(part_seen_fraction(e, part), 3)
-            rows.append(row)
-            print(json.dumps(row), flush=True)
+    for name, k, sc, views in committed_views(c, args.placements, args.seed, (0.0,) + EXTRA_VIEW_AZIMUTHS_DEG):
+        row = {"instance": name, "placement": k}
+        for n in (1, 2, 3):
+            e = merged_fit(model.space, views, n, sc.table.pose.matrix())
+            row[f"yaw{n}"] = round(yaw_error_deg(e.X_WO, sc.X_WO()), 1)
+            row[f"amb{n}"] = bool(yaw_ambiguous(e))
+            row[f"seen{n}"] = round(part_seen_fraction(e, part), 3)
+        rows.append(row)
+        print(json.dumps(row), flush=True)
     wrong = sorted(r["seen1"] for r in rows if abs(r["yaw1"]) > OK_DEG)
     right = sorted(r["seen1"] for r in rows if abs(r["yaw1"]) <= OK_DEG)
     print(f"\n{c}: {len(rows)} placements, {len(part)} part points; part seen, first view: wrong yaws {wrong}; "

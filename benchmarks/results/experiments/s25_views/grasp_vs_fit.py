@@ -22,15 +22,15 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[4]))
 
-from catgrasp_drake.benchmark.runner import trial_placement, yaw_error_deg  # noqa: E402
+from probe import committed_views, merged_fit  # noqa: E402  (this folder's probe.py)
+
+from catgrasp_drake.benchmark.runner import yaw_error_deg  # noqa: E402
 from catgrasp_drake.category_model import CategoryModel  # noqa: E402
-from catgrasp_drake.data.dataset import INSTANCE_COUNTS, instance_name, load_annotations  # noqa: E402
+from catgrasp_drake.data.dataset import load_annotations  # noqa: E402
 from catgrasp_drake.demo import default_model_path  # noqa: E402
 from catgrasp_drake.grasping.descriptor import motion_functional_point  # noqa: E402
-from catgrasp_drake.prediction import ESTIMATORS, predict_motion  # noqa: E402
-from catgrasp_drake.station.scenario import load_scenario, with_instance  # noqa: E402
-from catgrasp_drake.systems.shape_estimator import estimate_on_table  # noqa: E402
-from catgrasp_drake.transfer import EXTRA_VIEW_AZIMUTHS_DEG, observe  # noqa: E402
+from catgrasp_drake.prediction import predict_motion  # noqa: E402
+from catgrasp_drake.transfer import EXTRA_VIEW_AZIMUTHS_DEG  # noqa: E402
 
 
 def main(argv=None) -> int:
@@ -42,35 +42,28 @@ def main(argv=None) -> int:
     c = args.category
     region = {"drill": "trigger", "spray_bottle": "trigger", "mug": "handle"}[c]
     model = CategoryModel.load(default_model_path(c), category=c)
-    hyp = ESTIMATORS["latent"].hypotheses
     rows = []
-    for i in range(INSTANCE_COUNTS[c]):
-        name = instance_name(c, i)
+    for name, k, scenario, views in committed_views(c, args.placements, args.seed, (0.0,) + EXTRA_VIEW_AZIMUTHS_DEG):
         p_O = np.asarray(load_annotations(c, name)["regions"][region]["center"], float)
-        base = with_instance(load_scenario(f"{c}_default"), name, category=c)
-        for k in range(args.placements):
-            scenario, _, _ = trial_placement(base, name, k, args.seed, noise=True)
-            X_WT, X_WO = scenario.table.pose.matrix(), scenario.X_WO()
-            views = [observe(scenario, turn_deg=az) for az in (0.0,) + EXTRA_VIEW_AZIMUTHS_DEG]
-            row = {"instance": name, "placement": k}
-            for label, n in (("one", 1), ("three", 3)):
-                p = np.vstack([v[0] for v in views[:n]])
-                cams = np.vstack([v[1] for v in views[:n]])
-                e = estimate_on_table(model.space, p, X_WT, camera_W=cams, yaw_candidates=8, hypotheses=hyp)
-                motion, _ = predict_motion("latent", model, e.x, e.X_WO, e.scale)
-                f_W = motion_functional_point(motion, model.grasp_anchor_H)
-                off_O = X_WO[:3, :3].T @ (f_W - (X_WO[:3, :3] @ p_O + X_WO[:3, 3]))
-                row[label] = {"pos_mm": round(1000 * float(np.linalg.norm(e.X_WO[:3, 3] - X_WO[:3, 3])), 1),
-                              "yaw": round(yaw_error_deg(e.X_WO, X_WO), 1), "scale": round(e.scale, 3),
-                              "off_mm": [round(1000 * float(v), 1) for v in off_O]}
-            if name in model.instances and k == 0:
-                j = model.instances.index(name)
-                motion, _ = predict_motion("latent", model, model.space.latent_train[j], X_WO, 1.0)
-                f_W = motion_functional_point(motion, model.grasp_anchor_H)
-                row["perfect"] = {"off_mm": [round(1000 * float(v), 1) for v in
-                                             X_WO[:3, :3].T @ (f_W - (X_WO[:3, :3] @ p_O + X_WO[:3, 3]))]}
-            rows.append(row)
-            print(json.dumps(row), flush=True)
+        X_WT, X_WO = scenario.table.pose.matrix(), scenario.X_WO()
+
+        def offset_mm(motion):  # the grasp's functional point minus the true region centre, TRUE frame O (mm)
+            f_W = motion_functional_point(motion, model.grasp_anchor_H)
+            return [round(1000 * float(v), 1) for v in X_WO[:3, :3].T @ (f_W - (X_WO[:3, :3] @ p_O + X_WO[:3, 3]))]
+
+        row = {"instance": name, "placement": k}
+        for label, n in (("one", 1), ("three", 3)):
+            e = merged_fit(model.space, views, n, X_WT)
+            motion, _ = predict_motion("latent", model, e.x, e.X_WO, e.scale)
+            row[label] = {"pos_mm": round(1000 * float(np.linalg.norm(e.X_WO[:3, 3] - X_WO[:3, 3])), 1),
+                          "yaw": round(yaw_error_deg(e.X_WO, X_WO), 1), "scale": round(e.scale, 3),
+                          "off_mm": offset_mm(motion)}
+        if name in model.instances and k == 0:
+            j = model.instances.index(name)
+            row["perfect"] = {"off_mm": offset_mm(predict_motion("latent", model, model.space.latent_train[j], X_WO,
+                                                                 1.0)[0])}
+        rows.append(row)
+        print(json.dumps(row), flush=True)
     for label in ("one", "three", "perfect"):
         off = np.array([r[label]["off_mm"] for r in rows if label in r])
         extra = ""

@@ -15,6 +15,7 @@ trigger gap ends; then, per bottle, the gap and the misses.
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import re
 import sys
@@ -36,6 +37,7 @@ def records(name):
     return [json.loads(line) for line in lines[1:] if line.strip()]
 
 
+@functools.lru_cache(maxsize=None)  # (one bottle's files read once, not once per trial)
 def trigger_gap_mm(split, instance, data):
     """The bottle's trigger gap (mm) from its generator parameters, or None (a scan: no parameters)."""
     from catgrasp_drake.benchmark.runner import ensure_test_split
