@@ -7,7 +7,7 @@ import pytest
 
 from catgrasp_drake.core import cpd
 from catgrasp_drake.core.cpd import CPDIteration, joint_normalization, nonrigid_cpd, rigid_cpd
-from catgrasp_drake.core.kernels import gaussian_kernel, low_rank_kernel
+from catgrasp_drake.core.kernels import gaussian_kernel, low_rank_kernel, sqdist
 from catgrasp_drake.errors import InputError
 
 from .test_synthetic_shapes import blob, fibonacci_sphere
@@ -223,7 +223,9 @@ def test_truncated_estep_is_the_dense_one_while_sigma_is_large():
 
 def test_float32_estep_within_its_stated_bound():
     Y, X = _estep_problem(far=False, n=400)
-    for sigma2 in (0.3**2, 0.1**2):
+    # sigma 0.1 and 0.05: most exponents lie below -87, where float32's normal range ends (they are clamped there)
+    assert (sqdist(Y, X) / (2 * 0.1**2) > -cpd._EXP_CLAMP32).mean() > 0.5
+    for sigma2 in (0.3**2, 0.1**2, 0.05**2):
         ref = cpd.estep(Y, X, sigma2, 0.05)
         got = cpd.estep(Y, X, sigma2, 0.05, dtype=np.float32)
         ctr = X.mean(0)
