@@ -24,8 +24,9 @@ Close-up (``closeup=True``, ``catgrasp film --closeup``): the cameras
 at ``CLOSEUP_DISTANCE_M``, with azimuths measured from the object's own +y
 (its functional direction) at each frame: "front" looks back at the trigger
 from the nozzle or chuck side, "side" from the object's -x side, "below" from
-under the region. Where the fingers meet the trigger or the handle is seen
-at the scale of a finger (an index fingertip sliding off the side of a
+under the region -- or, where that would put it under the table (a small drill's trigger sits low), from as
+low as :data:`CLOSEUP_MIN_HEIGHT_M` above the table top allows. Where the fingers meet the trigger or the
+handle is seen at the scale of a finger (an index fingertip sliding off the side of a
 spray-bottle trigger, say) -- which the station-scale views do not show.
 """
 
@@ -61,6 +62,15 @@ CLOSEUP_VIEWS: tuple[tuple[str, float, float], ...] = (("front", 0.0, 10.0), ("s
 CLOSEUP_DISTANCE_M = 0.22
 CLOSEUP_FOV_DEG = 50.0
 CLOSEUP_TILE = (300, 300)
+#: A camera is kept at least this far (m) above the table top: under it, it sees only the table.
+CLOSEUP_MIN_HEIGHT_M = 0.01
+
+
+def elevation_above(target, distance: float, elevation: float, floor_z: float) -> float:
+    """``elevation`` (rad), raised just enough that a camera ``distance`` (m) from ``target`` (world, m) at that
+    elevation is at least at height ``floor_z`` (m); at most 80 deg (a camera straight above has no "up")."""
+    lowest = (floor_z - float(target[2])) / distance
+    return elevation if lowest <= -1.0 else max(elevation, math.asin(min(lowest, math.sin(math.radians(80.0)))))
 
 
 def verdict_word(grasp_success: bool, functional_success: bool) -> str:
@@ -99,8 +109,10 @@ class Film:
             target = X_WO[:3, :3] @ np.asarray(self.closeup_O, float) + X_WO[:3, 3]
             yaw0, distance, fov = math.atan2(X_WO[1, 1], X_WO[0, 1]), CLOSEUP_DISTANCE_M, CLOSEUP_FOV_DEG
         images = []
+        table_z = float(h.scenario.table.pose.matrix()[2, 3])
         for _, az, el in self.views:
-            eye = camera_on_sphere_position(target, distance, yaw0 + math.radians(az), math.radians(el))
+            el = elevation_above(target, distance, math.radians(el), table_z + CLOSEUP_MIN_HEIGHT_M)
+            eye = camera_on_sphere_position(target, distance, yaw0 + math.radians(az), el)
             images.append(render_color(query, h.scene_graph.world_frame_id(), eye, target, self.size, fov,
                                        renderer=RENDERER_NAME))
         self.frames.append((label, float(context.get_time()), rise, tilt_deg(X0, X_WO), images))

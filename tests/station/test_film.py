@@ -77,3 +77,35 @@ def test_a_closeup_of_an_object_without_a_functional_region_says_so(tmp_path):
     station = trial_diagram(load_scenario("cylinder_test")).station
     with pytest.raises(InputError, match="no annotated functional region"):
         _film_for(station, True, None)
+
+
+def test_elevation_above_keeps_a_camera_over_the_table():
+    import math
+
+    from catgrasp_drake.film import elevation_above
+
+    below = math.radians(-40.0)
+    # 0.3 m up, 0.22 m away: -40 deg puts the camera at 0.159 m, above a floor at 0.01 m: unchanged
+    assert elevation_above((0.0, 0.0, 0.3), 0.22, below, 0.01) == below
+    # 0.08 m up: -40 deg would be at -0.061 m; raised to the floor exactly
+    el = elevation_above((0.0, 0.0, 0.08), 0.22, below, 0.01)
+    assert math.isclose(0.08 + 0.22 * math.sin(el), 0.01, abs_tol=1e-12)
+    # a target under the floor: at most 80 deg up (a camera straight above has no "up" direction)
+    assert math.isclose(elevation_above((0.0, 0.0, -1.0), 0.22, below, 0.01), math.radians(80.0))
+
+
+def test_the_closeup_below_view_of_a_low_trigger_sees_the_trigger_not_the_table(tmp_path):
+    """A small drill's trigger sits so low that a camera 40 deg under it would be inside the table."""
+    from catgrasp_drake.data.stretch import STRESS_FAMILIES, stretch_instance
+    from catgrasp_drake.film import CLOSEUP_VIEWS, _film_for
+    from catgrasp_drake.station.handwritten import handwritten_trial
+    from catgrasp_drake.trial import trial_diagram
+
+    obj = stretch_instance("drill", "drill_08", STRESS_FAMILIES["small"], tmp_path)
+    scenario, _ = handwritten_trial(object_dir=obj.directory)
+    td = trial_diagram(scenario)
+    film = _film_for(td.station, True, (64, 48))
+    film("start", td.diagram.CreateDefaultContext())
+    below = np.asarray(film.frames[0][4][[name for name, _, _ in CLOSEUP_VIEWS].index("below")], float)
+    # the old camera, inside the table, saw one uniform colour (the table); now the drill and the sky behind it
+    assert below[..., :3].reshape(-1, 3).std(axis=0).max() > 10.0
