@@ -1,11 +1,11 @@
-"""Session 27: the hand-written drill grasp with its fingers spread or moved up, on the tuning sets (records only).
+"""Session 27: the hand-written drill grasp with its fingers spread or moved in z, on the tuning sets (records only).
 
     python benchmarks/results/experiments/s27_drill_raise/spread_table.py
 
 Reads the ``diagrams/handwritten_sweep.py`` records in this folder (``spread_<S>_committed.json``: the 13
-committed drills; ``spread_<S>_stress.json``: their 52 stretched copies, ``--split stress``; ``shift_up5_stress``:
-the grasp 5 mm up, ``--shift 0 0 0.005``) and prints per
-variant the grasped and functional counts, the failure reasons, and where each missed trigger was missed
+committed drills; ``spread_<S>_stress.json``: their 52 stretched copies, ``--split stress``;
+``shift_<DZ>_stress.json``: the grasp moved DZ m up, ``--shift 0 0 DZ``) and prints per variant the grasped
+and functional counts, the failure reasons, and where each missed trigger was missed
 (the judge's "outside its box by ... z -D mm", object frame).
 """
 
