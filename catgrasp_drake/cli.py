@@ -162,6 +162,11 @@ def _category_folder(args):
     return cat
 
 
+#: ``--height-error`` of ``train --search`` and ``search-grasp`` (grasping.robustness.Robustness.height_m).
+HEIGHT_ERROR_HELP = ("the perturbed trials' grasp off in height by up to M metres against the object (uniform; a "
+                     "perception error in height; default 0: none, the table fixes the object's height)")
+
+
 def _cmd_train(args) -> int:
     from catgrasp_drake.grasping.sampling import SamplingParams
     from catgrasp_drake.training import TrainingConfig, train_category
@@ -185,7 +190,8 @@ def _cmd_train(args) -> int:
         if args.elite > args.population:
             raise InputError(f"--elite: {args.elite} is more than --population {args.population}")
         search = InstanceSearch(cem=CemParams(rounds=args.rounds, population=args.population, elite=args.elite),
-                                robustness=Robustness(perturbations=args.perturbations, seed=args.seed),
+                                robustness=Robustness(perturbations=args.perturbations, seed=args.seed,
+                                                      height_m=args.height_error),
                                 keep=args.keep)
     config = TrainingConfig(samples_per_instance=args.samples, seed=args.seed, workers=args.workers,
                             canonical_instance=args.canonical, cache_dir=args.cache, ray=args.ray,
@@ -580,7 +586,8 @@ def _cmd_search_grasp(args) -> int:
     result = search_grasp(args.category, chosen, cem=CemParams(rounds=args.rounds, population=args.population,
                                                                  elite=args.elite, seed=args.seed),
                           robustness=Robustness(perturbations=args.perturbations, seed=args.seed,
-                                                mass_scale=tuple(args.mass_scale)), search_std=std,
+                                                mass_scale=tuple(args.mass_scale), height_m=args.height_error),
+                          search_std=std,
                           grasp_file=args.grasp, object_dirs=object_dirs, cache_dir=args.cache, workers=args.workers,
                           ray=args.ray,
                           progress=lambda k, X, s: bar(f"rounds (best so far {max(s):.2f})", k + 1, total))
@@ -691,6 +698,8 @@ def build_parser() -> argparse.ArgumentParser:
     t.add_argument("--perturbations", type=_int_at_least(1, 50), default=2,
                    help="--search: trials per candidate (the first nominal, the others perturbed)")
     t.add_argument("--keep", type=_int_at_least(1, 50), default=3, help="--search: best grasps kept per instance")
+    t.add_argument("--height-error", type=float, default=0.0, metavar="M",
+                   help="--search: " + HEIGHT_ERROR_HELP)
     t.add_argument("--regressor", choices=("ridge", "auto", "trials"), default=None,
                    help="latent -> grasp regressor: ridge; auto: chosen by leave-one-instance-out error at the "
                         "functional point; trials: by leave-one-instance-out grasp trials, the canonical grasp "
@@ -853,6 +862,7 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--mass-scale", type=float, nargs=2, metavar=("LOW", "HIGH"), default=(0.7, 1.3),
                    help="the perturbed trials' object mass, times the instance's (uniform; e.g. 1 3 for bottles "
                         "that may be full)")
+    g.add_argument("--height-error", type=float, default=0.0, metavar="M", help=HEIGHT_ERROR_HELP)
     g.add_argument("--freeze", nargs="+", default=None, help="variation parameters kept at 0 (e.g. dx dy dz)")
     g.add_argument("--seed", type=_int_at_least(0, MAX_SEED), default=0)
     g.add_argument("--cache", default="out/grasp_search/cache", help="trial cache (resumes an interrupted search)")

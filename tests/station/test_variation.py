@@ -63,6 +63,37 @@ def test_perturbations_are_seeded_within_their_ranges_and_the_first_is_nominal()
     assert trial_score({"grasp": False, "functional": False}, 0.2) == 0.0
 
 
+def test_a_height_error_is_drawn_after_the_other_perturbations_and_moves_the_grasp_vertically():
+    from dataclasses import replace
+
+    from catgrasp_drake.grasping.robustness import object_offset
+
+    flat = Robustness(perturbations=20, seed=3)
+    tall = replace(flat, height_m=0.004)
+    assert perturbation(tall, "drill_00", 0) == perturbation(flat, "drill_00", 0) | {"dz": 0.0}
+    for k in range(1, 20):
+        p, q = perturbation(tall, "drill_00", k), perturbation(flat, "drill_00", k)
+        assert {n: v for n, v in p.items() if n != "dz"} == q  # the other draws keep their values
+        assert abs(p["dz"]) <= 0.004 and object_offset(p)[2, 3] == p["dz"]
+        np.testing.assert_array_equal(object_offset(p)[:2], object_offset(q)[:2])
+    assert len({perturbation(tall, "drill_00", k)["dz"] for k in range(1, 20)}) == 19
+    assert "dz" not in perturbation(flat, "drill_00", 1) and object_offset(perturbation(flat, "drill_00", 1))[2, 3] == 0
+    with pytest.raises(InputError, match="height_m"):
+        Robustness(height_m=0.2)
+
+
+def test_a_height_error_of_15_mm_puts_the_index_under_the_drill_trigger():
+    """Physics: drill_00's hand-written grasp is functional as planned (diagrams/handwritten_sweep.py, session 27);
+    with the object 15 mm higher than planned the hand lands 15 mm low and the index misses below the trigger."""
+    from catgrasp_drake.station.handwritten import handwritten_trial
+    from catgrasp_drake.trial import run_perturbed_trial
+
+    scenario, motion = handwritten_trial("drill", "drill_00")
+    p = perturbation(Robustness(height_m=0.02), "drill_00", 0) | {"dz": 0.015}
+    r = run_perturbed_trial(scenario, motion, p)
+    assert r["grasp"] and not r["functional"] and r["reason"] == "trigger_missed", r
+
+
 def test_the_search_scores_candidates_by_their_trials_and_keys_a_given_grasp_file_by_its_content(tmp_path,
                                                                                                  monkeypatch):
     import hashlib
