@@ -597,7 +597,9 @@ def _cmd_search_grasp(args) -> int:
                                                                                                 args.category)))
     atomic_write_text(out / "search.json", json.dumps(result.to_dict(), indent=1) + "\n")
     header = (f"# Searched by `catgrasp search-grasp --category {args.category} --perturbations {args.perturbations} "
-              f"--mass-scale {args.mass_scale[0]:g} {args.mass_scale[1]:g}` from {grasp_file.name}: robustness "
+              f"--mass-scale {args.mass_scale[0]:g} {args.mass_scale[1]:g}"
+              + (f" --height-error {args.height_error:g}" if args.height_error else "")
+              + f"` from {grasp_file.name}: robustness "
               f"{result.start_score:.2f} -> {result.best_score:.2f} on {len(chosen)} instances ({', '.join(chosen)}), "
               f"{result.trials} trials.\n")
     atomic_write_text(out / grasp_file.name, header + yaml.safe_dump(new, sort_keys=False, default_flow_style=None))
