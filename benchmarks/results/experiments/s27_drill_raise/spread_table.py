@@ -4,7 +4,8 @@
 
 Reads the ``diagrams/handwritten_sweep.py`` records in this folder (``spread_<S>_committed.json``: the 13
 committed drills; ``spread_<S>_stress.json``: their 52 stretched copies, ``--split stress``;
-``shift_<DZ>_stress.json``: the grasp moved DZ m up, ``--shift 0 0 DZ``) and prints per variant the grasped
+``shift_<DZ>_stress.json``: the grasp moved DZ m up, ``--shift 0 0 DZ``; ``searched_<how>_*.json``: a grasp
+file from ``catgrasp search-grasp``, probe 3 of ``plan.md``) and prints per variant the grasped
 and functional counts, the failure reasons, and where each missed trigger was missed
 (the judge's "outside its box by ... z -D mm", object frame).
 """
@@ -25,7 +26,7 @@ def main() -> int:
     print("| record | trials | grasped | functional | functional small / large / thin / deep | trigger missed (z of "
           "the miss, mm) | not lifted | other failures |")
     print("|---|---:|---:|---:|---|---|---:|---|")
-    for path in sorted([*HERE.glob("spread_*.json"), *HERE.glob("shift_*.json")]):
+    for path in sorted([*HERE.glob("spread_*.json"), *HERE.glob("shift_*.json"), *HERE.glob("searched_*.json")]):
         rows = json.loads(path.read_text())
         reasons = Counter(r["reason"] for r in rows)
         missed = [WHERE_Z.search(r.get("detail") or "") for r in rows if r["reason"] == "trigger_missed"]
