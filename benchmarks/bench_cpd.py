@@ -44,8 +44,14 @@ shape space's beta, lambda and w, as ``build_shape_space`` calls it -- with each
 E-step; prints the largest change of the deformed points ``C + G W`` (m) against
 ``e_step="exact"``.
 
+``--subnormals``: instead, why ``e_step="fast"`` clamps its float32 exponents at -87 (session 27): one
+float32 E-step block (2000 x 262, the layout at M = N = 2000) -- exp, column sums and the product with the
+targets -- timed for exponents drawn uniformly in [-5, 0], [-90, 0] and [-200, 0], unclamped (exponents
+below -87.3 give subnormal kernel values) and clamped at -87, median of 100.
+
 Run:  python benchmarks/bench_cpd.py --sizes 2000 4000 8000
       python benchmarks/bench_cpd.py --committed
+      python benchmarks/bench_cpd.py --subnormals
 """
 
 from __future__ import annotations
@@ -232,6 +238,33 @@ def committed_models():
               f"| {times} |")
 
 
+def subnormal_blocks(repeats: int = 100) -> None:
+    """Median time (ms) of one float32 E-step block with and without the clamp at -87 (module docstring)."""
+    rng = np.random.default_rng(0)
+    M, nb = 2000, cpd.BLOCK_ELEMENTS // 2000
+    rhs = rng.random((nb, 4)).astype(np.float32)
+    print(f"One float32 E-step block ({M} x {nb}): exp, column sums, product; median of {repeats} (ms)")
+    print()
+    print("| exponents | unclamped | clamped at -87 |")
+    print("|---|---:|---:|")
+    for lo in (-5.0, -90.0, -200.0):
+        E0 = rng.uniform(lo, 0.0, size=(M, nb)).astype(np.float32)
+        times = []
+        for clamp in (False, True):
+            ts = []
+            for _ in range(repeats):
+                E = E0.copy()
+                t0 = time.perf_counter()
+                if clamp:
+                    np.maximum(E, cpd._EXP_CLAMP32, out=E)
+                np.exp(E, out=E)
+                E.sum(axis=0)
+                E @ rhs
+                ts.append(time.perf_counter() - t0)
+            times.append(1e3 * float(np.median(ts)))
+        print(f"| [{lo:g}, 0] | {times[0]:.2f} | {times[1]:.2f} |")
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--sizes", type=int, nargs="+", default=[2000, 4000, 8000])
@@ -244,9 +277,14 @@ def main(argv=None):
     ap.add_argument("--no-memory", action="store_true", help="skip the tracemalloc runs")
     ap.add_argument("--committed", action="store_true",
                     help="only the committed shape spaces' registrations: deviation of each E-step from the exact one")
+    ap.add_argument("--subnormals", action="store_true",
+                    help="only the float32 E-step block with and without its clamp at -87 (subnormal numbers)")
     args = ap.parse_args(argv)
     if args.committed:
         committed_models()
+        return
+    if args.subnormals:
+        subnormal_blocks()
         return
     print(f"Non-rigid CPD, M = N, beta={BETA} lambda={LAM} w={W} (normalised units), {os.cpu_count()} CPUs, "
           f"{n_threads()} E-step threads, load average {os.getloadavg()[0]:.2f} at the start")

@@ -199,14 +199,12 @@ class EStep:
 
 
 _EXP_CLAMP = -300.0  # exponents below this are clamped (relative error < e^-50 per kept column)
-# float32 blocks: clamped at -87, where float32's normal range ends (e^-87 = 1.6e-38 > 1.18e-38): a column gains
-# at most M e^-87 of mass, against the e^-60 below which it is redone (< M e^-27 relative, far below float32's
-# rounding), and no subnormal is made (measured on an Intel Xeon: subnormal float32 blocks 3-6x slower)
-_EXP_CLAMP32 = -87.0
 _BAD_LOGSUM = -250.0  # a column whose largest exponent is below this is redone in the log domain
 _NO_CLAMP_BOUND = 290.0  # every exponent provably >= -290 (> -300 after rounding): the clamp would change nothing
-# float32 blocks: kernel values below float32's normal range (1.18e-38 = e^-87.3) lose digits or flush to 0,
-# which changes a column whose sum is above e^-60 by < M e^-27 relative; columns below are redone
+# float32 blocks: exponents are clamped at -87, where float32's normal range ends (e^-87 = 1.6e-38 > 1.18e-38), so
+# no subnormal is made (3-6x slower blocks on an Intel Xeon: bench_cpd.py --subnormals); a column gains at most
+# M e^-87 of mass, < M e^-27 relative to any column whose sum is above e^-60; columns below that are redone
+_EXP_CLAMP32 = -87.0
 _BAD_LOGSUM32 = -60.0
 #: Machine epsilon of float32 (the rounding unit of ``e_step="fast"``'s exponents).
 EPS32 = float(np.finfo(np.float32).eps)
