@@ -156,9 +156,10 @@ def _category_folder(args):
     if args.category not in (None, cat.name, cat.like):
         raise InputError(f"--objects {args.objects[0]}: a {cat.name!r} category (like {cat.like}), "
                          f"not {args.category!r}")
-    for flag, value in (("--instances", args.instances), ("--canonical", args.canonical), ("--stretch", args.stretch)):
+    for flag, value in (("--instances", args.instances), ("--canonical", args.canonical), ("--stretch", args.stretch),
+                        ("--grasp", args.grasp)):
         if value:
-            raise InputError(f"{flag}: a category folder trains on its own meshes and canonical instance")
+            raise InputError(f"{flag}: a category folder trains on its own meshes, canonical instance and grasp")
     return cat
 
 
@@ -181,6 +182,8 @@ def _cmd_train(args) -> int:
         _check_instances(args.category, [args.canonical], "--canonical")
         if args.instances and args.canonical not in args.instances:
             raise InputError(f"--canonical: {args.canonical!r} is not among --instances")
+    if args.grasp is not None and not Path(args.grasp).is_file():
+        raise InputError(f"--grasp: no such grasp file {args.grasp}")
     search = None
     if args.search:
         from catgrasp_drake.grasping.robustness import Robustness
@@ -195,7 +198,7 @@ def _cmd_train(args) -> int:
                                 keep=args.keep)
     config = TrainingConfig(samples_per_instance=args.samples, seed=args.seed, workers=args.workers,
                             canonical_instance=args.canonical, cache_dir=args.cache, ray=args.ray,
-                            sampling=SamplingParams(), search=search,
+                            sampling=SamplingParams(), search=search, grasp_file=args.grasp,
                             regressor=args.regressor or ("trials" if args.search else "ridge"))
     if folder is not None:
         return _train_folder(folder, config, args)
@@ -214,7 +217,8 @@ def _cmd_train(args) -> int:
             print(f"held out (never trained on; the demo's novel instances): {', '.join(names[len(instances):])}")
     how = (f"a robustness search per instance ({args.rounds} rounds x {args.population} candidates x "
            f"{args.perturbations} trials at most)" if args.search else f"{args.samples} sampled motions per instance")
-    print(f"training {args.category} on {len(instances)} instances: {how}, seed {args.seed}")
+    print(f"training {args.category} on {len(instances)} instances: {how}, seed {args.seed}"
+          + (f", canonical grasp {args.grasp}" if args.grasp else ""))
     objects = list(args.objects or ())
     if objects:
         print(f"and {len(objects)} imported objects: {', '.join(str(d) for d in objects)}")
@@ -684,6 +688,9 @@ def build_parser() -> argparse.ArgumentParser:
                         "large, thin, deep; data/stretch.py), written once under --stretch-dir")
     t.add_argument("--stretch-dir", default="out/benchmark/data/stress",
                    help="--stretch: where the stretched copies are written (default: the stress split's own)")
+    t.add_argument("--grasp", default=None, metavar="FILE",
+                   help="the canonical grasp to train from (default: models/grasps/<category>_handwritten.yaml), "
+                        "e.g. a file written by catgrasp search-grasp; the model keeps it as its template")
     t.add_argument("--samples", type=_int_at_least(1, MAX_SAMPLES), default=12, help="sampled motions per instance")
     t.add_argument("--seed", type=_int_at_least(0, MAX_SEED), default=0)
     t.add_argument("--workers", type=_int_at_least(0, MAX_WORKERS), default=None,
