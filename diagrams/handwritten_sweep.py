@@ -51,6 +51,8 @@ import json
 import sys
 from pathlib import Path
 
+import yaml
+
 ROOT = Path(__file__).resolve().parents[1]
 CATEGORIES = ("drill", "spray_bottle", "mug")
 
@@ -69,7 +71,7 @@ def sweep_task(spec: dict) -> dict:
     if spec.get("mass_scale"):
         scenario = scenario.replace(plant=dataclasses.replace(scenario.plant, object_mass_scale=spec["mass_scale"]))
     motion = learned_motion(spec["model"], category, instance) if spec.get("model") else \
-        load_handwritten_motion(category, instance, annotations_dir=model_dir)
+        load_handwritten_motion(category, instance, spec.get("grasp_file"), annotations_dir=model_dir)
     if spec.get("postures"):
         motion = with_postures(motion, spec["postures"])
     if spec.get("shift") or spec.get("rotate"):
@@ -170,6 +172,9 @@ def main(argv=None) -> int:
                     help="set one joint of one posture of every grasp, e.g. closed.svh_pinky=0.856 (rad)")
     ap.add_argument("--model", type=Path, help="a trained model: its learned grasp on each of its training "
                                                  "instances instead of the hand-written one (one category)")
+    ap.add_argument("--grasp", type=Path, metavar="FILE",
+                    help="this grasp file instead of models/grasps/<category>_handwritten.yaml (its category's "
+                         "objects only; e.g. one written by catgrasp search-grasp)")
     ap.add_argument("--objects", type=Path, nargs="+", metavar="DIR",
                     help="imported objects (catgrasp import-object; e.g. out/ycb/drill/ycb_035) instead of the "
                          "embedded instances; each in its own category")
@@ -204,12 +209,27 @@ def main(argv=None) -> int:
         if not args.mass_scale > 0:
             ap.error(f"--mass-scale: must be > 0, got {args.mass_scale}")
         variant["mass_scale"] = args.mass_scale
+    if args.grasp is not None:
+        from catgrasp_drake.core.fileio import file_sha256
+
+        if args.model is not None:
+            ap.error("--grasp and --model: a model's learned grasps replace the grasp file")
+        if not args.grasp.is_file():
+            ap.error(f"--grasp: no such grasp file {args.grasp}")
+        grasp_category = (yaml.safe_load(args.grasp.read_text()) or {}).get("category")
+        if grasp_category not in CATEGORIES:
+            ap.error(f"--grasp: {args.grasp} names no category (drill, spray_bottle, mug)")
+        args.categories = [grasp_category]
+        variant |= {"grasp_file": str(args.grasp.resolve()), "grasp_sha256": file_sha256(args.grasp)}
     if args.objects:
         if args.model is not None:
             ap.error("--objects and --model: a model's learned grasps are for its own training instances")
         from catgrasp_drake.data.dataset import imported_object
 
         objects = [(*imported_object(d), str(d)) for d in args.objects]
+        others = sorted({c for c, _, _ in objects} - set(args.categories)) if args.grasp is not None else []
+        if others:
+            ap.error(f"--grasp: a {args.categories[0]} grasp, but --objects holds {', '.join(others)}")
         args.categories = [c for c in CATEGORIES if any(o[0] == c for o in objects)]
         targets = [(c, i, {"model_dir": d}) for c, i, d in objects]
     else:

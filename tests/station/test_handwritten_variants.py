@@ -104,3 +104,49 @@ def test_the_sweeps_mass_scale_makes_the_object_heavier_in_the_simulation():
     assert sweep_task(spec)["grasp"]
     heavy = sweep_task(spec | {"mass_scale": 30.0})
     assert not heavy["grasp"] and heavy["reason"] in ("not_lifted", "lifted_short", "slipped", "shaken_loose"), heavy
+
+
+def test_the_sweep_runs_a_grasp_file_in_place_of_the_hand_written_one(tmp_path, monkeypatch, capsys):
+    """``--grasp FILE``: every trial of the file's category runs the file's grasp (and the file's hash keys the
+    cache); a file of another category than --objects, or with --model, is refused in one line."""
+    import sys
+    from pathlib import Path
+
+    import yaml
+
+    import catgrasp_drake.runner
+    import catgrasp_drake.trial
+    from catgrasp_drake.station.handwritten import GRASPS_DIR, load_handwritten_motion
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "diagrams"))
+    import handwritten_sweep
+
+    spec = yaml.safe_load((GRASPS_DIR / "drill_handwritten.yaml").read_text())
+    spec["grasp"]["position"][2] += 0.004
+    grasp = tmp_path / "drill_up.yaml"
+    grasp.write_text(yaml.safe_dump(spec))
+    seen = []
+    monkeypatch.setattr(catgrasp_drake.runner, "run_tasks", lambda task, specs, **kw: seen.extend(specs) or [])
+    assert handwritten_sweep.main(["--grasp", str(grasp), "--instances", "drill_00", "drill_03",
+                                   "--json", str(tmp_path / "rows.json")]) == 0
+    assert [(s["category"], s["instance"]) for s in seen] == [("drill", "drill_00"), ("drill", "drill_03")]
+    assert seen[0]["grasp_file"] == str(grasp.resolve()) and len(seen[0]["grasp_sha256"]) == 64
+
+    ran = []
+    monkeypatch.setattr(catgrasp_drake.trial, "run_grasp_trial", lambda scenario, motion, params: ran.append(motion)
+                        or (_ for _ in ()).throw(RuntimeError("stop")))
+    with pytest.raises(RuntimeError, match="stop"):
+        handwritten_sweep.sweep_task(seen[0])
+    as_written = load_handwritten_motion("drill", "drill_00").pose("grasp")
+    assert np.allclose(ran[0].pose("grasp")[:3, 3] - as_written[:3, 3], [0, 0, 0.004], atol=1e-9)
+
+    from catgrasp_drake.benchmark.runner import stretched_objects
+
+    [(_, mug)] = stretched_objects(tmp_path / "stretched", "mug", ["mug_00"], ["deep"])
+    for argv, message in [(["--grasp", str(tmp_path / "none.yaml")], "--grasp: no such grasp file"),
+                          (["--grasp", str(grasp), "--model", "models/trained/drill.npz", "--categories", "drill"],
+                           "--grasp and --model"),
+                          (["--grasp", str(grasp), "--objects", str(mug)], "a drill grasp, but --objects holds mug")]:
+        with pytest.raises(SystemExit):
+            handwritten_sweep.main(argv)
+        assert message in capsys.readouterr().err
