@@ -82,16 +82,17 @@ def test_a_height_error_is_drawn_after_the_other_perturbations_and_moves_the_gra
         Robustness(height_m=0.2)
 
 
-def test_a_height_error_of_15_mm_puts_the_index_under_the_drill_trigger():
-    """Physics: drill_00's hand-written grasp is functional as planned (diagrams/handwritten_sweep.py, session 27);
-    with the object 15 mm higher than planned the hand lands 15 mm low and the index misses below the trigger."""
+def test_a_height_error_of_15_mm_moves_the_drill_grasp_off_what_holds():
+    """Physics: drill_00's hand-written grasp is functional as planned (diagrams/handwritten_sweep.py); with the
+    object 15 mm lower than planned the hand lands 15 mm high on the handle and does not lift the drill.
+    (Session 28's grasp, searched for height errors, is still functional 15 and 20 mm low: the other side.)"""
     from catgrasp_drake.station.handwritten import handwritten_trial
     from catgrasp_drake.trial import run_perturbed_trial
 
     scenario, motion = handwritten_trial("drill", "drill_00")
-    p = perturbation(Robustness(height_m=0.02), "drill_00", 0) | {"dz": 0.015}
+    p = perturbation(Robustness(height_m=0.02), "drill_00", 0) | {"dz": -0.015}
     r = run_perturbed_trial(scenario, motion, p)
-    assert r["grasp"] and not r["functional"] and r["reason"] == "trigger_missed", r
+    assert not r["grasp"] and r["reason"] == "not_lifted", r
 
 
 def test_the_search_scores_candidates_by_their_trials_and_keys_a_given_grasp_file_by_its_content(tmp_path,
