@@ -182,8 +182,12 @@ def _cmd_train(args) -> int:
         _check_instances(args.category, [args.canonical], "--canonical")
         if args.instances and args.canonical not in args.instances:
             raise InputError(f"--canonical: {args.canonical!r} is not among --instances")
-    if args.grasp is not None and not Path(args.grasp).is_file():
-        raise InputError(f"--grasp: no such grasp file {args.grasp}")
+    if args.grasp is not None:
+        from catgrasp_drake.station.handwritten import read_grasp_file
+
+        if not Path(args.grasp).is_file():
+            raise InputError(f"--grasp: no such grasp file {args.grasp}")
+        read_grasp_file(args.grasp, args.category)  # a wrong category or bad YAML before any training
     search = None
     if args.search:
         from catgrasp_drake.grasping.robustness import Robustness
@@ -562,7 +566,7 @@ def _cmd_search_grasp(args) -> int:
     from catgrasp_drake.grasping.robustness import Robustness
     from catgrasp_drake.grasping.search import CemParams
     from catgrasp_drake.robot.models import load_hand_postures
-    from catgrasp_drake.station.handwritten import GRASPS_DIR
+    from catgrasp_drake.station.handwritten import GRASPS_DIR, read_grasp_file
     from catgrasp_drake.station.variation import VARIATION_NAMES, VARIATION_SCALE
 
     instances = _check_category(args.category)
@@ -585,6 +589,7 @@ def _cmd_search_grasp(args) -> int:
     grasp_file = Path(args.grasp) if args.grasp else GRASPS_DIR / f"{args.category}_handwritten.yaml"
     if not grasp_file.is_file():
         raise InputError(f"--grasp: no such grasp file {grasp_file}")
+    spec = read_grasp_file(grasp_file, args.category)
     bar = _Progress()
     total = args.rounds
     result = search_grasp(args.category, chosen, cem=CemParams(rounds=args.rounds, population=args.population,
@@ -596,7 +601,6 @@ def _cmd_search_grasp(args) -> int:
                           ray=args.ray,
                           progress=lambda k, X, s: bar(f"rounds (best so far {max(s):.2f})", k + 1, total))
     out = Path(args.out or f"out/grasp_search/{args.category}")
-    spec = yaml.safe_load(grasp_file.read_text())
     new = apply_variation_to_spec(spec, result.best, args.category, load_hand_postures(spec.get("postures",
                                                                                                 args.category)))
     atomic_write_text(out / "search.json", json.dumps(result.to_dict(), indent=1) + "\n")

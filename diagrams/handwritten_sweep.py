@@ -51,8 +51,6 @@ import json
 import sys
 from pathlib import Path
 
-import yaml
-
 ROOT = Path(__file__).resolve().parents[1]
 CATEGORIES = ("drill", "spray_bottle", "mug")
 
@@ -211,12 +209,18 @@ def main(argv=None) -> int:
         variant["mass_scale"] = args.mass_scale
     if args.grasp is not None:
         from catgrasp_drake.core.fileio import file_sha256
+        from catgrasp_drake.errors import InputError, ModelFileError
+        from catgrasp_drake.station.handwritten import read_grasp_file
 
         if args.model is not None:
             ap.error("--grasp and --model: a model's learned grasps replace the grasp file")
         if not args.grasp.is_file():
             ap.error(f"--grasp: no such grasp file {args.grasp}")
-        grasp_category = (yaml.safe_load(args.grasp.read_text()) or {}).get("category")
+        try:
+            spec = read_grasp_file(args.grasp)
+        except (InputError, ModelFileError) as e:
+            ap.error(f"--grasp: {e}")
+        grasp_category = spec.get("category") if isinstance(spec, dict) else None
         if grasp_category not in CATEGORIES:
             ap.error(f"--grasp: {args.grasp} names no category (drill, spray_bottle, mug)")
         args.categories = [grasp_category]

@@ -139,15 +139,26 @@ def load_handwritten_motion(category: str, instance: str, path: str | Path | Non
     ``annotations_dir``: an imported object's directory (its ``annotations.json``) instead of the
     embedded data set's instance."""
     path = Path(path) if path is not None else GRASPS_DIR / f"{category}_handwritten.yaml"
+    spec = read_grasp_file(path, category)
+    return motion_from_spec(spec, _annotations(category, instance, annotations_dir), where=str(path.name))
+
+
+def read_grasp_file(path: str | Path, category: str | None = None):
+    """The parsed grasp file at ``path`` (a hand-written or searched grasp; the format in the module docstring).
+
+    ModelFileError if it cannot be read, InputError if it is not YAML or names another category than
+    ``category`` (when given; a file without ``category`` fits any). The fields are checked when a motion is
+    made from it (:func:`motion_from_spec`)."""
+    path = Path(path)
     try:
         spec = yaml.safe_load(path.read_text())
     except OSError as e:
         raise ModelFileError(f"{path}: cannot read hand-written grasp ({e})") from None
     except yaml.YAMLError as e:
         raise InputError(f"{path}: not valid YAML ({e})") from None
-    if isinstance(spec, dict) and spec.get("category", category) != category:
+    if category is not None and isinstance(spec, dict) and spec.get("category", category) != category:
         raise InputError(f"{path}: grasp for {spec.get('category')!r}, not {category!r}")
-    return motion_from_spec(spec, _annotations(category, instance, annotations_dir), where=str(path.name))
+    return spec
 
 
 def shifted_motion(motion: GraspMotion, category: str, instance: str, shift_O, rotate_deg=(0.0, 0.0, 0.0), *,

@@ -133,8 +133,12 @@ def test_the_sweep_runs_a_grasp_file_in_place_of_the_hand_written_one(tmp_path, 
     assert seen[0]["grasp_file"] == str(grasp.resolve()) and len(seen[0]["grasp_sha256"]) == 64
 
     ran = []
-    monkeypatch.setattr(catgrasp_drake.trial, "run_grasp_trial", lambda scenario, motion, params: ran.append(motion)
-                        or (_ for _ in ()).throw(RuntimeError("stop")))
+
+    def record_and_stop(scenario, motion, params):  # the motion the trial would run; no simulation
+        ran.append(motion)
+        raise RuntimeError("stop")
+
+    monkeypatch.setattr(catgrasp_drake.trial, "run_grasp_trial", record_and_stop)
     with pytest.raises(RuntimeError, match="stop"):
         handwritten_sweep.sweep_task(seen[0])
     as_written = load_handwritten_motion("drill", "drill_00").pose("grasp")
@@ -142,11 +146,14 @@ def test_the_sweep_runs_a_grasp_file_in_place_of_the_hand_written_one(tmp_path, 
 
     from catgrasp_drake.benchmark.runner import stretched_objects
 
+    not_yaml = tmp_path / "broken.yaml"
+    not_yaml.write_text("grasp: [0.1, 0.2\n")
     [(_, mug)] = stretched_objects(tmp_path / "stretched", "mug", ["mug_00"], ["deep"])
     for argv, message in [(["--grasp", str(tmp_path / "none.yaml")], "--grasp: no such grasp file"),
                           (["--grasp", str(grasp), "--model", "models/trained/drill.npz", "--categories", "drill"],
                            "--grasp and --model"),
-                          (["--grasp", str(grasp), "--objects", str(mug)], "a drill grasp, but --objects holds mug")]:
+                          (["--grasp", str(grasp), "--objects", str(mug)], "a drill grasp, but --objects holds mug"),
+                          (["--grasp", str(not_yaml)], "not valid YAML")]:
         with pytest.raises(SystemExit):
             handwritten_sweep.main(argv)
         assert message in capsys.readouterr().err

@@ -37,4 +37,8 @@ def test_grasp_file_errors_are_one_line(tmp_path, capsys):
     assert main(["train", "--objects", str(EXAMPLE_FOLDER), "--grasp", str(GRASPS_DIR / "mug_handwritten.yaml")]) == 2
     assert "--grasp: a category folder trains on its own meshes, canonical instance and grasp" in \
         capsys.readouterr().err
+    # a grasp file of another category is refused before any training
+    assert main(["train", "drill", "--grasp", str(GRASPS_DIR / "mug_handwritten.yaml"), "--out",
+                 str(tmp_path / "m.npz")]) == 2
+    assert "grasp for 'mug', not 'drill'" in capsys.readouterr().err
     assert not (tmp_path / "m.npz").exists()
