@@ -733,19 +733,29 @@ def _squarem_cpd(Xn, Yn, G, Q, lam_k, lam, e_of, m_step, start, s2, max_iter, to
 # --------------------------------------------------------------------------- rigid
 
 
-def weighted_procrustes(PX, P1, Pt1, Np, X, Y, *, scale: bool = True):
+def weighted_procrustes(PX, P1, Pt1, Np, X, Y, *, scale: bool = True, upright: bool = False):
     """Rigid (+ scale) CPD M-step: ``argmin sum P_mn |x_n - (s R y_m + t)|^2``.
 
+    ``upright`` (3-D only): ``R`` is restricted to rotations about the z axis (an object standing on a
+    table whose normal is z keeps its z up; closed form ``yaw = atan2(A_yx - A_xy, A_xx + A_yy)``).
     Returns ``(R, t, s, tr_AR)`` with ``R`` proper (det +1).
     """
     mu_x = (Pt1 @ X) / Np
     mu_y = (P1 @ Y) / Np
     A = PX.T @ Y - Np * np.outer(mu_x, mu_y)  # sum P (x - mu_x)(y - mu_y)^T
-    U, S, Vt = np.linalg.svd(A)
-    C = np.ones(A.shape[0])
-    C[-1] = np.sign(np.linalg.det(U @ Vt)) or 1.0
-    R = (U * C) @ Vt
-    tr_AR = float((S * C).sum())
+    if upright:
+        if A.shape != (3, 3):
+            raise InputError(f"upright: needs 3-D points, got {A.shape[0]}-D")
+        yaw = math.atan2(A[1, 0] - A[0, 1], A[0, 0] + A[1, 1])
+        c, si = math.cos(yaw), math.sin(yaw)
+        R = np.array([[c, -si, 0.0], [si, c, 0.0], [0.0, 0.0, 1.0]])
+        tr_AR = float(np.trace(R.T @ A))
+    else:
+        U, S, Vt = np.linalg.svd(A)
+        C = np.ones(A.shape[0])
+        C[-1] = np.sign(np.linalg.det(U @ Vt)) or 1.0
+        R = (U * C) @ Vt
+        tr_AR = float((S * C).sum())
     if scale:
         yPy = float(P1 @ ((Y - mu_y) ** 2).sum(1))
         s = tr_AR / yPy if yPy > 0 else 1.0

@@ -209,7 +209,7 @@ class _Fit(NamedTuple):
 class _Problem:
     """Precomputed linear model and options for one observation."""
 
-    def __init__(self, space, O, camera, w, prior, scale_bounds, radius_factor, fit_scale):
+    def __init__(self, space, O, camera, w, prior, scale_bounds, radius_factor, fit_scale, upright=False):
         self.space = space
         V0, B = space.displacement_basis
         self.a = space.canonical + V0  # (M, 3)
@@ -225,6 +225,7 @@ class _Problem:
         self.scale_bounds = scale_bounds
         self.radius_factor = radius_factor
         self.fit_scale = fit_scale
+        self.upright = upright
         ext = O.max(0) - O.min(0) + 0.02
         self.log_volume = float(np.log(max(float(np.prod(ext)), 1e-9)))
 
@@ -256,7 +257,7 @@ class _Problem:
         pose, ``(s^2/sigma2 H + prior I) x = s^2/sigma2 g`` (``x`` unchanged if singular)."""
         x = fit.x
         Yv = fit.Y[idx]
-        R, t, s, _ = weighted_procrustes(e.PX, e.P1, e.Pt1, e.Np, O, Yv, scale=self.fit_scale)
+        R, t, s, _ = weighted_procrustes(e.PX, e.P1, e.Pt1, e.Np, O, Yv, scale=self.fit_scale, upright=self.upright)
         if self.fit_scale:
             s_clamped = float(np.clip(s, *self.scale_bounds))
             if s_clamped != s:
@@ -437,6 +438,7 @@ def infer_latent_pose(
     residual_beta: float | None = None,
     residual_lam: float = 3.0,
     hypotheses: int = 1,
+    upright: bool = False,
 ) -> InferenceResult:
     """Fit latent x and a similarity (R, t, s) of ``space`` to ``observed`` (N, 3), metres.
 
@@ -476,6 +478,10 @@ def infer_latent_pose(
     fits in order); the distinct refined fits (:data:`SAME_MODE_DEG`,
     :data:`SAME_MODE_M`) are the result's ``hypotheses``, for a grasp chosen
     across them. 1: the search's best start only (the earlier behaviour).
+    ``upright``: the rotation stays about the observation frame's z axis (the object stands on a table whose
+    normal is that z; ``initial_pose``'s rotation should then be a yaw too): every M-step's Procrustes is
+    restricted to a yaw (:func:`~catgrasp_drake.core.cpd.weighted_procrustes`). False: a free rotation, the
+    paper's 7-parameter similarity.
     """
     t0 = time.perf_counter()
     if not isinstance(space, ShapeSpace):
@@ -504,7 +510,8 @@ def infer_latent_pose(
         yaw_keep = count(yaw_keep, "yaw_keep", 1, MAX_YAW_CANDIDATES)
     prune_iter = count(prune_iter, "prune_iter", 1)
     visibility_move = non_negative(visibility_move, "visibility_move")
-    for name, flag in (("recenter_visibility", recenter_visibility), ("search_float32", search_float32)):
+    for name, flag in (("recenter_visibility", recenter_visibility), ("search_float32", search_float32),
+                       ("upright", upright)):
         if not isinstance(flag, (bool, np.bool_)):
             raise InputError(f"{name}: expected True or False, got {flag!r}")
     max_points = count(max_points, "max_points", 3)
@@ -519,7 +526,7 @@ def infer_latent_pose(
             residual_beta = kernel_width(residual_beta, "residual_beta")
         residual_lam = positive(residual_lam, "residual_lam")
     n_hypotheses = count(hypotheses, "hypotheses", 1, MAX_YAW_CANDIDATES)
-    prob = _Problem(space, O, camera, w, prior, (lo, hi), radius_factor, bool(fit_scale))
+    prob = _Problem(space, O, camera, w, prior, (lo, hi), radius_factor, bool(fit_scale), bool(upright))
 
     with single_threaded_blas():
         x0 = np.zeros(space.q)

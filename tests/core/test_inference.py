@@ -194,3 +194,35 @@ def test_two_views_merged_are_fitted_with_the_union_of_their_visibility(space):
     assert err[~union].mean() < 3e-3  # the part neither camera saw is completed
     with pytest.raises(InputError, match="camera_position"):
         infer_latent_pose(space, obs_a, camera_position=np.zeros((2, 2)))
+
+
+def test_upright_procrustes_recovers_a_yaw_exactly_and_never_tilts():
+    from catgrasp_drake.core.cpd import weighted_procrustes
+
+    rng = np.random.default_rng(3)
+    Y = rng.normal(size=(60, 3))
+    P1 = rng.uniform(0.5, 1.5, 60)  # one-to-one correspondences with weights: P = diag(P1)
+    R_true, t_true, s_true = rotz(2.4), np.array([0.3, -0.2, 0.05]), 1.3
+    X = s_true * Y @ R_true.T + t_true
+    R, t, s, _ = weighted_procrustes(P1[:, None] * X, P1, P1, P1.sum(), X, Y, upright=True)
+    assert rotation_angle(R @ R_true.T) < 1e-9 and abs(s - s_true) < 1e-9 and np.allclose(t, t_true)
+    # tilted 10 deg about x: the free fit finds the tilt, the upright one keeps z up and finds the yaw
+    Rx = np.array([[1, 0, 0], [0, np.cos(0.175), -np.sin(0.175)], [0, np.sin(0.175), np.cos(0.175)]])
+    Xt = Y @ (Rx @ R_true).T
+    R_free = weighted_procrustes(P1[:, None] * Xt, P1, P1, P1.sum(), Xt, Y)[0]
+    R_up = weighted_procrustes(P1[:, None] * Xt, P1, P1, P1.sum(), Xt, Y, upright=True)[0]
+    assert rotation_angle(R_free @ (Rx @ R_true).T) < 1e-9
+    assert np.allclose(R_up[:, 2], [0, 0, 1]) and np.allclose(R_up[2], [0, 0, 1])
+    assert rotation_angle(R_up @ R_true.T) < 0.05
+
+
+def test_upright_fit_keeps_z_up_and_finds_the_yaw(space):
+    x_true = space.latent_train[5]
+    T, vis, cam, R_true = _observe(space, x_true, 2.0, np.array([0.0, 0.3, 0.0]), 1.0, az_deg=120)
+    r = infer_latent_pose(space, T[vis], camera_position=cam, yaw_candidates=8, upright=True, hypotheses=2)
+    for fit in (r,) + tuple(r.hypotheses):
+        assert np.allclose(fit.R[:, 2], [0, 0, 1], atol=1e-12)  # no tilt, in every hypothesis
+    assert rotation_angle(r.R @ R_true.T) < 0.1
+    assert np.linalg.norm(r.completed - T, axis=1).mean() < 4e-3
+    with pytest.raises(InputError, match="upright"):
+        infer_latent_pose(space, T[vis], upright="yes")

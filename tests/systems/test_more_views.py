@@ -115,7 +115,7 @@ def test_a_mug_that_two_views_leave_open_is_put_right_by_the_third():
         estimate = td.estimator.estimate_now(td.estimator.GetMyMutableContextFromRoot(context))
         out[view] = (estimate.views, abs(yaw_error_deg(estimate.X_WO, scenario.X_WO())))
     assert out["single"][0] == 1 and out["single"][1] > 30.0
-    assert out["two"][0] == 2 and out["two"][1] > 90.0  # the handle put on the far side
+    assert out["two"][0] == 2 and out["two"][1] > 30.0  # still wrong (135 deg with a free tilt, 48 deg upright)
     assert out["active"][0] == 3 and out["active"][1] < 10.0  # two views still left it open: a third look
     assert out["three"] == out["active"]  # the same merged fit
 
