@@ -209,7 +209,7 @@ class _Fit(NamedTuple):
 class _Problem:
     """Precomputed linear model and options for one observation."""
 
-    def __init__(self, space, O, camera, w, prior, scale_bounds, radius_factor, fit_scale, upright=False):
+    def __init__(self, space, O, camera, w, prior, scale_bounds, radius_factor, fit_scale, upright):
         self.space = space
         V0, B = space.displacement_basis
         self.a = space.canonical + V0  # (M, 3)
