@@ -142,7 +142,7 @@ def test_the_functional_part_is_seen_where_the_data_covers_it():
 def test_a_further_view_is_taken_only_when_the_policy_needs_it():
     model = CategoryModel.load(default_model_path("mug"), category="mug")
     base = with_instance(load_scenario("mug_default"), "mug_00", category="mug")
-    scenario, _, _ = trial_placement(base, "mug_00", 2, 4242, noise=True)  # handle in view, yaw right, not unsure
+    scenario, _, _ = trial_placement(base, "mug_00", 5, 4242, noise=True)  # handle in view, yaw right, not unsure
     p_W, camera_W = observe(scenario)
     taken = []
 
