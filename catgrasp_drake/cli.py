@@ -345,7 +345,7 @@ def _default_records_path(config) -> Path:
     if config.split == "objects":  # the user's own objects: not the committed tables' records
         return Path("out/benchmark") / ("objects" + ("_" + "+".join(config.views) if tuple(config.views) != ("single",)
                                                      else "") + ".jsonl")
-    parts = [config.split]
+    parts = [config.split if config.split != "fresh" else f"fresh_seed{config.data_seed}"]
     if config.split != "smoke" and tuple(config.categories) != CATEGORIES:
         parts.append("+".join(config.categories))
     if tuple(config.views) != ("single",):
@@ -371,7 +371,8 @@ def _cmd_benchmark(args) -> int:
         split=split, objects=tuple(args.objects or ()), categories=tuple(args.categories), methods=tuple(args.methods),
         views=tuple(args.views),
         placements=args.placements, instances_per_category=args.instances_per_category,
-        instances=tuple(args.instances) if args.instances else None, seed=args.seed, noise=not args.no_noise,
+        instances=tuple(args.instances) if args.instances else None, data_seed=args.data_seed, seed=args.seed,
+        noise=not args.no_noise,
         physics=args.physics, min_confidence=args.min_confidence, data_dir=args.data, cache_dir=args.cache,
         workers=args.workers, ray=args.ray)
     model_paths = None
@@ -753,8 +754,9 @@ def build_parser() -> argparse.ArgumentParser:
 
     b = sub.add_parser("benchmark", help="the project's measure: held-out objects, every method through the "
                        "transfer diagram, varied placements, the strict judge, intervals")
-    b.add_argument("--split", choices=("test", "ycb", "ais", "stress", "smoke", "objects"), default=None,
-                   help="test (default): generated from the fixed test seed; ycb: real scans (extra .[ycb]); "
+    b.add_argument("--split", choices=("test", "fresh", "ycb", "ais", "stress", "smoke", "objects"), default=None,
+                   help="test (default): generated from the fixed test seed; fresh: generated from --data-seed "
+                        "(instances nobody has seen); ycb: real scans (extra .[ycb]); "
                         "ais: the 11 real AIS drill clouds (../shared/datasets/ais_drills); stress: the "
                         "committed instances stretched to real proportions (a TUNING set); "
                         "smoke: 2 drills; objects: the --objects")
@@ -777,6 +779,9 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--placements", type=_int_at_least(1, 1000), default=3, help="placements per instance and view")
     b.add_argument("--instances-per-category", type=_int_at_least(1), default=12)
     b.add_argument("--instances", nargs="+", help="only these instances of the split")
+    b.add_argument("--data-seed", type=int, default=None, metavar="N",
+                   help="with --split fresh: the data-set seed its instances are generated from (any but the test "
+                        "split's and the committed data set's)")
     b.add_argument("--seed", type=_int_at_least(0, MAX_SEED), default=0, help="seed of placements, cameras and noise")
     b.add_argument("--no-noise", action="store_true", help="no depth noise (on by default: Kinect-v2-like)")
     b.add_argument("--physics", choices=("default", "time_step_1e-3", "effort_1.0x", "friction_0.5"),

@@ -41,8 +41,10 @@ SEED = 0
 LEVEL = 0.95
 DEFAULT_PHYSICS = "default"
 #: Display orders (values not listed follow, sorted by name).
-SPLITS = ("test", "ycb", "ais", "stress")
-SPLIT_TITLES = {"test": "held-out generated instances", "ycb": "real scans (YCB)",
+SPLITS = ("test", "fresh", "ycb", "ais", "stress")
+SPLIT_TITLES = {"test": "held-out generated instances",
+                "fresh": "generated instances of a newly drawn data-set seed (the records' data_seed): never seen",
+                "ycb": "real scans (YCB)",
                 "ais": "real drills (AIS clouds; trigger pinned, session 21: the session-7 model's transfer)",
                 "stress": "the committed instances stretched to real proportions (a TUNING set, not a measure)",
                 "smoke": "smoke run"}
@@ -100,6 +102,10 @@ def _validated(records: Iterable[dict], *, unique: bool = False) -> list[dict]:
                 trial = ", ".join(f"{f} {r.get(f)}" for f in TRIAL_KEY)
                 raise InputError(f"the records hold the same trial twice ({trial}); is a records file passed twice?")
             seen.add(k)
+    fresh_seeds = sorted({r.get("data_seed") for r in records if r["split"] == "fresh"}, key=str)
+    if len(fresh_seeds) > 1:  # their instances share names: one table would mix different objects
+        raise InputError(f"the records hold the split 'fresh' of several data-set seeds ({fresh_seeds}); "
+                         "report or merge one seed at a time")
     return records
 
 
@@ -121,7 +127,7 @@ def merged_records(existing: Iterable[dict], new: Iterable[dict]) -> list[dict]:
     that holds others (``catgrasp benchmark --merge``)."""
     rerun = {_trial_key(r): r for r in _validated(new, unique=True)}
     kept = {_trial_key(r): r for r in _validated(existing, unique=True)}  # dicts keep the file's order
-    return [rerun.get(k, r) for k, r in kept.items()] + [r for k, r in rerun.items() if k not in kept]
+    return _validated([rerun.get(k, r) for k, r in kept.items()] + [r for k, r in rerun.items() if k not in kept])
 
 
 def _record_files(paths) -> list[Path]:

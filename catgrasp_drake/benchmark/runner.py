@@ -17,6 +17,10 @@ are the train/tune split):
            ``<data_dir>/ais``; those that stand on their base (8 of 11: drill_2, 3 and 9 fall over by
            themselves). Drills only; the environment variable ``CATGRASP_AIS_DRILLS`` names another
            folder of ``drill_<n>.pcd`` files.
+``fresh``  generated instances from a seed the user draws (``data_seed``; neither :data:`TEST_SEED` nor the
+           committed data set's): instances nobody has seen, not even the test split's readers, written on
+           demand into ``<data_dir>/fresh_seed<data_seed>/<category>``. Its records carry ``data_seed``;
+           one records file holds one seed.
 ``smoke``  the first two test drills, one placement, latent and rigid: the CI run.
 ``objects`` the user's imported objects (``catgrasp import-object``), one directory each in
            ``BenchmarkConfig.objects``; their records go to ``out/benchmark/``, not the committed tables.
@@ -57,7 +61,7 @@ from catgrasp_drake.transfer import VIEWS
 
 #: The test split's data-set seed. Fixed; nothing (grasps, kernels, thresholds) is chosen on it.
 TEST_SEED = 7919
-SPLITS = ("test", "ycb", "ais", "stress", "smoke", "objects")
+SPLITS = ("test", "fresh", "ycb", "ais", "stress", "smoke", "objects")
 #: The YCB scans of each category that have the category's functional part.
 YCB_BY_CATEGORY = {"drill": ("ycb_035",), "spray_bottle": ("ycb_022",), "mug": ("ycb_025",)}
 BENCHMARK_METHODS = ("latent", "latent_map", "paper", "nearest", "rigid", "cpd")
@@ -91,6 +95,7 @@ class BenchmarkConfig:
     instances_per_category: int = 12
     instances: tuple[str, ...] | None = None  # restrict to these instance names
     objects: tuple[str, ...] = ()  # split "objects": the imported objects' directories
+    data_seed: int | None = None  # split "fresh": the data-set seed of its generated instances
     seed: int = 0
     noise: bool = True
     physics: str = "default"
@@ -116,6 +121,17 @@ class BenchmarkConfig:
             raise InputError(f"objects: given for split {self.split!r}; they are the split 'objects'")
         if not all(isinstance(d, str) and d for d in self.objects):
             raise InputError(f"objects: expected directory names, got {self.objects!r}")
+        if self.split == "fresh":
+            from catgrasp_drake.data.dataset import DATASET_SEED
+
+            if isinstance(self.data_seed, bool) or not isinstance(self.data_seed, int) or self.data_seed < 0:
+                raise InputError("split fresh: give its data-set seed (--data-seed, a non-negative integer), "
+                                 f"got {self.data_seed!r}")
+            if self.data_seed in (TEST_SEED, DATASET_SEED):
+                whose = "the test split" if self.data_seed == TEST_SEED else "the committed data set"
+                raise InputError(f"data_seed: {self.data_seed} is {whose}'s seed; a fresh split needs another")
+        elif self.data_seed is not None:
+            raise InputError(f"data_seed: only for the split 'fresh' (the split {self.split!r} has its own objects)")
         if self.physics not in PHYSICS:
             raise InputError(f"physics: expected one of {PHYSICS}, got {self.physics!r}")
         if not (isinstance(self.placements, int) and 1 <= self.placements <= 1000):
@@ -169,6 +185,24 @@ def _generator_version() -> str:
     return _data_code_version("categories.py", "shapes.py", "dataset.py", "meshes.py")
 
 
+def fresh_split_dir(data_dir: str | Path, data_seed: int) -> Path:
+    return Path(data_dir) / f"fresh_seed{int(data_seed)}"
+
+
+def ensure_fresh_split(data_dir: str | Path, data_seed: int, category: str) -> Path:
+    """Generate ``category``'s instances of the data-set seed ``data_seed`` into
+    ``<data_dir>/fresh_seed<data_seed>/<category>`` unless the current generators made them there."""
+    from catgrasp_drake.data.dataset import INSTANCE_COUNTS, generate_dataset
+
+    root = fresh_split_dir(data_dir, data_seed)
+    marker = root / category / "COMPLETE"
+    stamp = f"seed {data_seed}, {INSTANCE_COUNTS[category]} instances, generators {_generator_version()}"
+    if not marker.is_file() or marker.read_text().strip() != stamp:
+        generate_dataset(root, categories=(category,), seed=data_seed)
+        atomic_write_text(marker, stamp + "\n")
+    return root
+
+
 def split_objects(config: BenchmarkConfig) -> list[BenchmarkObject]:
     """The objects of ``config.split`` for its categories (generated or prepared on demand)."""
     out = []
@@ -182,6 +216,14 @@ def split_objects(config: BenchmarkConfig) -> list[BenchmarkObject]:
             for i in range(n):
                 name = instance_name(category, i)
                 out.append(BenchmarkObject(config.split, category, name, str(root / category / name)))
+    elif config.split == "fresh":
+        from catgrasp_drake.data.dataset import INSTANCE_COUNTS, instance_name
+
+        for category in config.categories:
+            root = ensure_fresh_split(config.data_dir, config.data_seed, category)
+            for i in range(min(config.instances_per_category, INSTANCE_COUNTS[category])):
+                name = instance_name(category, i)
+                out.append(BenchmarkObject("fresh", category, name, str(root / category / name)))
     elif config.split == "objects":
         from catgrasp_drake.data.dataset import imported_object
 
@@ -420,6 +462,11 @@ def yaw_error_deg(X_WO_estimated, X_WO_true) -> float:
     return math.degrees(math.atan2(y_true[0] * y_est[1] - y_true[1] * y_est[0], float(y_true @ y_est)))
 
 
+def trial_identity(spec: dict) -> dict:
+    """The record fields a trial's spec fixes: :data:`TRIAL_KEYS` and, for the fresh split, ``data_seed``."""
+    return {k: spec[k] for k in TRIAL_KEYS} | ({"data_seed": spec["data_seed"]} if "data_seed" in spec else {})
+
+
 def benchmark_trial_task(spec: dict) -> dict:
     """Worker task: one benchmark trial (spec from :func:`trial_specs`) -> its record (JSON-able)."""
     from catgrasp_drake.transfer import make_transfer_diagram, run_transfer
@@ -433,7 +480,7 @@ def benchmark_trial_task(spec: dict) -> dict:
     result = run_transfer(td)
     timings = {k: round(float(v), 4) for k, v in result.timings.items()} | {"build": round(build_s, 4)}
     timings["total"] = round(time.perf_counter() - t0, 4)
-    record = {k: spec[k] for k in TRIAL_KEYS}
+    record = trial_identity(spec)
     measured = {k: (None if not math.isfinite(v) else round(v, 6)) for k, v in result.judge.items()}
     return record | {
         "grasp": bool(result.grasp_success), "functional": bool(result.functional_success),
@@ -474,6 +521,8 @@ def trial_specs(config: BenchmarkConfig, model_paths: dict[str, str] | None = No
         # changed import): its files are part of the cache key
         own = ({"object_sha256": object_files_sha256(obj.model_dir, obj.instance)}
                if obj.split in ("objects", "ycb", "ais", "stress") else {})
+        if obj.split == "fresh":
+            own["data_seed"] = int(config.data_seed)
         for view in config.views:
             for trial in range(placements):
                 for method in config.methods:
@@ -501,7 +550,7 @@ def run_benchmark(config: BenchmarkConfig, *, model_paths: dict[str, str] | None
     for spec, outcome in zip(specs, outcomes):
         r = dict(outcome.result)
         if "grasp" not in r:  # a dead worker or an exception inside the task: a failed trial, said so
-            r = {k: spec[k] for k in TRIAL_KEYS} | {
+            r = trial_identity(spec) | {
                 "grasp": False, "functional": False,
                 "reason": "worker_died" if r.get("worker_died") else "task_error",
                 "detail": str(r.get("error", r))[:300], "timings": {}}
@@ -524,6 +573,7 @@ def spec_from_record(record: dict, *, data_dir: str | Path = "out/benchmark/data
     config = BenchmarkConfig(
         split=record["split"], categories=(record["category"],), methods=(record["method"],),
         views=(record["view"],), placements=int(record["trial"]) + 1, instances=(record["instance"],),
+        data_seed=record.get("data_seed"),
         instances_per_category=max(INSTANCE_COUNTS.values()), objects=tuple(objects), seed=int(record["seed"]),
         noise=bool(record["noise"]), physics=record["physics"], min_confidence=float(record["min_confidence"]),
         data_dir=str(data_dir))

@@ -231,6 +231,35 @@ def test_a_test_split_made_by_other_generators_is_generated_again(tmp_path):
     assert tree_digest(root) == fresh
 
 
+def test_the_fresh_split_draws_instances_nobody_has_seen_from_its_own_seed(tmp_path):
+    """``--split fresh --data-seed N``: the category's instances generated from N (not the test split's, not the
+    committed ones), N carried by every spec and record so the trial can be run again; the two seeds the
+    project has looked at are refused, and records of two fresh seeds are not mixed in one table."""
+    from catgrasp_drake.benchmark.report import merged_records
+    from catgrasp_drake.benchmark.runner import TEST_SEED, ensure_test_split, spec_from_record, trial_identity
+    from catgrasp_drake.data.dataset import DATASET_SEED, read_annotations
+
+    cfg = BenchmarkConfig(split="fresh", data_seed=31, categories=("mug",), methods=("latent", "rigid"),
+                          instances_per_category=2, placements=2, data_dir=str(tmp_path))
+    specs = trial_specs(cfg)
+    assert len(specs) == 2 * 2 * 2 and {s["data_seed"] for s in specs} == {31}
+    assert {s["instance"] for s in specs} == {"mug_00", "mug_01"}
+    fresh = read_annotations(tmp_path / "fresh_seed31" / "mug" / "mug_00" / "annotations.json")
+    test = read_annotations(ensure_test_split(tmp_path) / "mug" / "mug_00" / "annotations.json")
+    assert fresh["seed"] != test["seed"]  # another object under the same name
+    again = spec_from_record(trial_identity(specs[3]), data_dir=tmp_path)
+    assert again == specs[3]
+    for bad in (None, TEST_SEED, DATASET_SEED, -1, 1.5):
+        with pytest.raises(InputError, match="seed"):
+            BenchmarkConfig(split="fresh", data_seed=bad)
+    with pytest.raises(InputError, match="only for the split 'fresh'"):
+        BenchmarkConfig(split="test", data_seed=31)
+    base = {"split": "fresh", "category": "mug", "instance": "mug_00", "trial": 0, "view": "single",
+            "method": "latent", "physics": "default", "seed": 0, "grasp": True, "functional": True}
+    with pytest.raises(InputError, match="several data-set seeds"):
+        merged_records([base | {"data_seed": 31}], [base | {"data_seed": 32, "trial": 1}])
+
+
 def test_benchmark_merge_rewrites_only_the_rerun_trials(tmp_path, monkeypatch):
     """``catgrasp benchmark --merge`` (a category re-run after retraining it) keeps the file's other trials;
     without it the file holds this run's trials only. The trials themselves are stubbed: this is the CLI's
