@@ -528,7 +528,9 @@ def infer_latent_pose(
     n_hypotheses = count(hypotheses, "hypotheses", 1, MAX_YAW_CANDIDATES)
     prob = _Problem(space, O, camera, w, prior, (lo, hi), radius_factor, bool(fit_scale), bool(upright))
 
-    with single_threaded_blas():
+    # the starts of the yaw search and the refined hypotheses are independent fits: they run side by side on
+    # the cores (each is computed exactly as alone, so the result does not depend on the machine)
+    with single_threaded_blas(), ThreadPoolExecutor(n_threads()) as fits:
         x0 = np.zeros(space.q)
         c_obs = O.mean(axis=0)
         Y0 = prob.model(x0)
@@ -557,12 +559,14 @@ def infer_latent_pose(
             vis_every = max(1, 2 * visibility_every)
             k_prune = search_iter if yaw_keep is None or yaw_keep >= len(yaws) else min(prune_iter, search_iter)
             f32 = bool(search_float32)
-            states = [prob.run(start(yaw), O_sub, k_prune, 0.0, vis_every=vis_every, float32=f32) for yaw in yaws]
+            states = list(fits.map(lambda yaw: prob.run(start(yaw), O_sub, k_prune, 0.0, vis_every=vis_every,
+                                                        float32=f32), yaws))
             start_energies = [st.energy for st in states]
             if k_prune < search_iter:  # only the yaw_keep lowest energies go on (stable order: ties keep the first)
                 kept = sorted(np.argsort(start_energies, kind="stable")[:yaw_keep])
+                list(fits.map(lambda i: prob.run(states[i], O_sub, search_iter, 0.0, vis_every=vis_every,
+                                                 k_start=k_prune, float32=f32), kept))
                 for i in kept:
-                    prob.run(states[i], O_sub, search_iter, 0.0, vis_every=vis_every, k_start=k_prune, float32=f32)
                     start_energies[i] = states[i].energy
                 states = [states[i] for i in kept]
             order = np.argsort([st.energy for st in states], kind="stable")  # ties keep the first
@@ -577,13 +581,14 @@ def infer_latent_pose(
         O_fit = _subsample(O, max_points)
         # a pool even on one core: whether the E-step is split into blocks must not depend on the machine
         pool = ThreadPoolExecutor(n_threads())
+        def refine(rank):
+            st = refine_first[rank]
+            st.visible = None
+            st = prob.run(st, O_fit, max_iter, tol, vis_every=visibility_every, pool=pool, vis_move=visibility_move)
+            return _finish(prob, st, O, w, space, residual_cpd, residual_beta, residual_lam, rank)
+
         try:
-            finished = []
-            for rank, st in enumerate(refine_first):
-                st.visible = None
-                st = prob.run(st, O_fit, max_iter, tol, vis_every=visibility_every, pool=pool,
-                              vis_move=visibility_move)
-                finished.append(_finish(prob, st, O, w, space, residual_cpd, residual_beta, residual_lam, rank))
+            finished = list(fits.map(refine, range(len(refine_first))))
         finally:
             if pool is not None:
                 pool.shutdown()
