@@ -237,13 +237,23 @@ def _dead_worker_result(exitcode: int | None) -> dict:
             "worker_died": True}
 
 
+def _share_cores(threads: int) -> None:
+    """Worker-process initializer: cap the numerical core's threads (``core.threads.THREADS_ENV``)."""
+    from catgrasp_drake.core.threads import THREADS_ENV
+
+    os.environ[THREADS_ENV] = str(threads)
+
+
 def _pool_round(fn, todo: dict, finish, n_workers: int) -> tuple[list[str], int | None]:
     """Run ``todo`` in one pool of spawned workers, at most ``n_workers`` tasks submitted at a time (so a
     submitted task is a running one); finished tasks are reported through ``finish``. Returns
     ``([], None)`` when all finished, else, when a worker died, the keys that were in flight and a dead
     worker's exit code (the tasks never started are simply not reported)."""
     queue = list(todo)
-    pool = ProcessPoolExecutor(max_workers=min(n_workers, len(queue)), mp_context=get_context("spawn"))
+    n_procs = min(n_workers, len(queue))
+    # the processes share the cores: each one's numerical core gets its share of threads (time only)
+    pool = ProcessPoolExecutor(max_workers=n_procs, mp_context=get_context("spawn"), initializer=_share_cores,
+                               initargs=(max(1, (os.cpu_count() or 1) // n_procs),))
     pending: dict = {}
     procs: dict = {}  # the pool's worker processes, kept to read a dead one's exit code
     try:

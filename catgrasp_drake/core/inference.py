@@ -439,6 +439,7 @@ def infer_latent_pose(
     residual_lam: float = 3.0,
     hypotheses: int = 1,
     upright: bool = False,
+    fit_threads: int | None = None,
 ) -> InferenceResult:
     """Fit latent x and a similarity (R, t, s) of ``space`` to ``observed`` (N, 3), metres.
 
@@ -481,7 +482,9 @@ def infer_latent_pose(
     ``upright``: the rotation stays about the observation frame's z axis (the object stands on a table whose
     normal is that z; ``initial_pose``'s rotation should then be a yaw too): every M-step's Procrustes is
     restricted to a yaw (:func:`~catgrasp_drake.core.cpd.weighted_procrustes`). False: a free rotation, the
-    paper's 7-parameter similarity.
+    paper's 7-parameter similarity. ``fit_threads``: threads that run the search's starts and the refined
+    hypotheses side by side (None: one per core, at most 4; 1: one after another). The result is the same
+    to the bit whatever the count; 1 suits many fits in parallel processes.
     """
     t0 = time.perf_counter()
     if not isinstance(space, ShapeSpace):
@@ -526,11 +529,12 @@ def infer_latent_pose(
             residual_beta = kernel_width(residual_beta, "residual_beta")
         residual_lam = positive(residual_lam, "residual_lam")
     n_hypotheses = count(hypotheses, "hypotheses", 1, MAX_YAW_CANDIDATES)
+    fit_threads = n_threads() if fit_threads is None else count(fit_threads, "fit_threads", 1, 64)
     prob = _Problem(space, O, camera, w, prior, (lo, hi), radius_factor, bool(fit_scale), bool(upright))
 
     # the starts of the yaw search and the refined hypotheses are independent fits: they run side by side on
     # the cores (each is computed exactly as alone, so the result does not depend on the machine)
-    with single_threaded_blas(), ThreadPoolExecutor(n_threads()) as fits:
+    with single_threaded_blas(), ThreadPoolExecutor(fit_threads) as fits:
         x0 = np.zeros(space.q)
         c_obs = O.mean(axis=0)
         Y0 = prob.model(x0)

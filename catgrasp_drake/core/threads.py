@@ -11,10 +11,18 @@ import ctypes
 import functools
 import os
 
+#: Environment variable that caps :func:`n_threads` (set to the cores per process in the worker processes
+#: of :func:`catgrasp_drake.runner.run_tasks`, whose siblings already share the cores).
+THREADS_ENV = "CATGRASP_THREADS"
+
 
 def n_threads() -> int:
-    """Worker threads of a threaded E-step: the cores, at most 4."""
-    return max(1, min(4, os.cpu_count() or 1))
+    """Threads of the numerical core's parallel parts (a large E-step's blocks, a shape fit's independent
+    starts and hypotheses): the cores, at most 4, at most ``$CATGRASP_THREADS`` when set. Results never
+    depend on it (block layouts are fixed by problem size); only time does."""
+    n = max(1, min(4, os.cpu_count() or 1))
+    cap = os.environ.get(THREADS_ENV, "").strip()
+    return min(n, int(cap)) if cap.isdigit() and int(cap) >= 1 else n
 
 
 #: Run BLAS single-threaded inside the EM loops (see :class:`single_threaded_blas`).

@@ -172,18 +172,15 @@ def test_shape_hypotheses_refine_the_best_starts_and_keep_distinct_fits(space):
 
 
 def test_the_fit_is_the_same_whether_its_starts_and_hypotheses_run_side_by_side_or_one_after_another(
-        space, monkeypatch):
+        space):
     """The yaw search's starts and the refined hypotheses are independent fits run on a thread per core: one
     thread gives the same bits (energies, poses, shapes, every hypothesis), so results never depend on the
     machine."""
-    import catgrasp_drake.core.inference as inference
-
     T, vis, cam, _ = _observe(space, space.latent_train[3], 2.0, np.array([0.02, 0.3, 0.0]), 1.0, az_deg=120)
     results = []
     for threads in (3, 1):
-        monkeypatch.setattr(inference, "n_threads", lambda t=threads: t)
         results.append(infer_latent_pose(space, T[vis], camera_position=cam, yaw_candidates=8, hypotheses=3,
-                                         upright=True))
+                                         upright=True, fit_threads=threads))
     side_by_side, alone = results
     assert len(side_by_side.hypotheses) == len(alone.hypotheses) >= 2
     assert side_by_side.diagnostics["start_energies"] == alone.diagnostics["start_energies"]
@@ -191,6 +188,9 @@ def test_the_fit_is_the_same_whether_its_starts_and_hypotheses_run_side_by_side_
         assert a.energy == b.energy
         for u, v in ((a.x, b.x), (a.R, b.R), (a.t, b.t), (a.completed, b.completed)):
             np.testing.assert_array_equal(u, v)
+    for bad in (0, 2.5, "two"):
+        with pytest.raises(InputError, match="fit_threads"):
+            infer_latent_pose(space, T[vis], camera_position=cam, fit_threads=bad)
 
 
 def test_two_views_merged_are_fitted_with_the_union_of_their_visibility(space):

@@ -24,6 +24,26 @@ def square(spec: dict) -> dict:
     return {"y": spec["x"] ** 2}
 
 
+def core_threads(spec: dict) -> dict:
+    """A task reporting the numerical core's thread count in its worker."""
+    from catgrasp_drake.core.threads import n_threads
+
+    time.sleep(0.2)  # both workers start
+    return {"threads": n_threads()}
+
+
+def test_worker_processes_share_the_cores_between_their_threads(tmp_path, monkeypatch):
+    """Two worker processes on this machine: each one's numerical core runs at most cores // 2 threads
+    (the fits' side-by-side threads would otherwise fight the sibling process for the cores); the
+    environment variable caps it in this process too."""
+    from catgrasp_drake.core.threads import THREADS_ENV, n_threads
+
+    out = run_tasks(core_threads, [{"i": i} for i in range(2)], cache_dir=None, code_version="v", workers=2)
+    assert {o.result["threads"] for o in out} == {max(1, min(n_threads(), (os.cpu_count() or 1) // 2))}
+    monkeypatch.setenv(THREADS_ENV, "1")
+    assert n_threads() == 1
+
+
 def test_runs_in_processes_in_spec_order_and_caches(tmp_path):
     specs = [{"x": i} for i in range(6)]
     out = run_tasks(square, specs, cache_dir=tmp_path, code_version="v1", workers=2)
