@@ -62,6 +62,7 @@ import dataclasses
 import math
 import time
 from concurrent.futures import ThreadPoolExecutor
+from contextlib import nullcontext
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
@@ -439,7 +440,7 @@ def infer_latent_pose(
     residual_lam: float = 3.0,
     hypotheses: int = 1,
     upright: bool = False,
-    fit_threads: int | None = None,
+    fit_threads: int | None = 1,
 ) -> InferenceResult:
     """Fit latent x and a similarity (R, t, s) of ``space`` to ``observed`` (N, 3), metres.
 
@@ -483,8 +484,10 @@ def infer_latent_pose(
     normal is that z; ``initial_pose``'s rotation should then be a yaw too): every M-step's Procrustes is
     restricted to a yaw (:func:`~catgrasp_drake.core.cpd.weighted_procrustes`). False: a free rotation, the
     paper's 7-parameter similarity. ``fit_threads``: threads that run the search's starts and the refined
-    hypotheses side by side (None: one per core, at most 4; 1: one after another). The result is the same
-    to the bit whatever the count; 1 suits many fits in parallel processes.
+    hypotheses side by side (1, the default: one after another; None: one per core, at most 4). The result
+    is the same to the bit whatever the count. Measured on the camera's clouds (``bench_transfer.py
+    --settings new parallel``, 2 cores): 4-12 % faster on a quiet machine, 2x slower when another process
+    keeps the cores busy (each EM iteration is hundreds of small numpy calls, bound by the interpreter).
     """
     t0 = time.perf_counter()
     if not isinstance(space, ShapeSpace):
@@ -532,9 +535,10 @@ def infer_latent_pose(
     fit_threads = n_threads() if fit_threads is None else count(fit_threads, "fit_threads", 1, 64)
     prob = _Problem(space, O, camera, w, prior, (lo, hi), radius_factor, bool(fit_scale), bool(upright))
 
-    # the starts of the yaw search and the refined hypotheses are independent fits: they run side by side on
-    # the cores (each is computed exactly as alone, so the result does not depend on the machine)
-    with single_threaded_blas(), ThreadPoolExecutor(fit_threads) as fits:
+    # the starts of the yaw search and the refined hypotheses are independent fits: with fit_threads > 1 they
+    # run side by side (each is computed exactly as alone, so the result does not depend on the count)
+    with single_threaded_blas(), ThreadPoolExecutor(fit_threads) if fit_threads > 1 else nullcontext() as fits:
+        each = fits.map if fit_threads > 1 else map
         x0 = np.zeros(space.q)
         c_obs = O.mean(axis=0)
         Y0 = prob.model(x0)
@@ -563,12 +567,12 @@ def infer_latent_pose(
             vis_every = max(1, 2 * visibility_every)
             k_prune = search_iter if yaw_keep is None or yaw_keep >= len(yaws) else min(prune_iter, search_iter)
             f32 = bool(search_float32)
-            states = list(fits.map(lambda yaw: prob.run(start(yaw), O_sub, k_prune, 0.0, vis_every=vis_every,
+            states = list(each(lambda yaw: prob.run(start(yaw), O_sub, k_prune, 0.0, vis_every=vis_every,
                                                         float32=f32), yaws))
             start_energies = [st.energy for st in states]
             if k_prune < search_iter:  # only the yaw_keep lowest energies go on (stable order: ties keep the first)
                 kept = sorted(np.argsort(start_energies, kind="stable")[:yaw_keep])
-                list(fits.map(lambda i: prob.run(states[i], O_sub, search_iter, 0.0, vis_every=vis_every,
+                list(each(lambda i: prob.run(states[i], O_sub, search_iter, 0.0, vis_every=vis_every,
                                                  k_start=k_prune, float32=f32), kept))
                 for i in kept:
                     start_energies[i] = states[i].energy
@@ -592,7 +596,7 @@ def infer_latent_pose(
             return _finish(prob, st, O, w, space, residual_cpd, residual_beta, residual_lam, rank)
 
         try:
-            finished = list(fits.map(refine, range(len(refine_first))))
+            finished = list(each(refine, range(len(refine_first))))
         finally:
             if pool is not None:
                 pool.shutdown()
