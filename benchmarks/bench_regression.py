@@ -73,4 +73,6 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    from catgrasp_drake.errors import run_script
+
+    raise SystemExit(run_script(main))

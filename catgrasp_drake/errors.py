@@ -31,3 +31,16 @@ def one_line(e: BaseException, *, with_type: bool = True, limit: int | None = 16
     if not with_type:
         return first or type(e).__name__
     return f"{type(e).__name__}: {first}" if first else type(e).__name__
+
+
+def run_script(main) -> int:
+    """Run a script's ``main()`` the way the ``catgrasp`` command does: a :class:`CatgraspError` (bad input,
+    a missing or corrupt file) ends it with one line on stderr and exit status 2, not a traceback."""
+    import sys
+    from pathlib import Path
+
+    try:
+        return int(main() or 0)
+    except CatgraspError as e:
+        print(f"{Path(sys.argv[0]).name}: error: {one_line(e, with_type=False, limit=None)}", file=sys.stderr)
+        return 2

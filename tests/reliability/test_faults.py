@@ -291,6 +291,21 @@ def test_the_cli_reports_a_corrupt_model_in_one_line(tmp_path, capsys):
     _one_line_naming(err, path)
 
 
+
+def test_a_script_reports_a_missing_object_directory_in_one_line(tmp_path):
+    """The diagram and benchmark scripts end bad input as the catgrasp command does: one line, status 2."""
+    import subprocess
+    import sys
+
+    root = Path(__file__).resolve().parents[2]
+    missing = tmp_path / "no_such_object"
+    run = subprocess.run([sys.executable, str(root / "diagrams" / "handwritten_sweep.py"), "--objects", str(missing)],
+                         capture_output=True, text=True, timeout=300)
+    assert run.returncode == 2
+    err = run.stderr.strip()
+    assert err.startswith("handwritten_sweep.py: error:") and "Traceback" not in err
+    _one_line_naming(err, missing)
+
 def _records():
     return [{"category": "drill", "fold": 5, "instance": "drill_11", "view": "single", "method": m,
              "seed": 0, "grasp": m == "latent", "functional": False, "reason": "not_lifted",
