@@ -2,7 +2,7 @@
 
     python diagrams/handwritten_sweep.py [--categories drill spray_bottle mug] [--workers 2]
                                          [--cache out/handwritten_sweep_cache] [--json out/handwritten_sweep.json]
-                                         [--shift DX DY DZ] [--rotate RX RY RZ] [--model FILE]
+                                         [--shift DX DY DZ] [--rotate RX RY RZ] [--yaw DEG] [--model FILE]
                                          [--posture NAME.JOINT=RAD ...]
                                          [--objects DIR...] [--placements N] [--no-object-clearance]
                                          [--mass-scale S] [--plan FIELD=VALUE ...]
@@ -12,7 +12,8 @@ Each trial uses the category's default scenario (``<category>_default`` in
 and the hand-written grasp ``models/grasps/<category>_handwritten.yaml``
 anchored to the instance's annotated region (``load_handwritten_motion``).
 ``--shift`` (m) and ``--rotate`` (deg, object-frame x-y-z Euler angles about
-the anchor region's centre) move the whole grasp in the object frame: the way
+the anchor region's centre) move the whole grasp in the object frame, and ``--yaw`` (deg) turns it
+about the object frame's vertical axis (z through the origin) afterwards: the way
 to try a change to a hand-written grasp, and to see how far off a predicted
 grasp may land before it fails; ``--posture closed.svh_pinky=0.856`` sets
 one joint of one hand posture of every grasp (rad), the way to try a
@@ -58,7 +59,7 @@ CATEGORIES = ("drill", "spray_bottle", "mug")
 def sweep_task(spec: dict) -> dict:
     """One trial: ``{"category", "instance"}`` -> JSON-able outcome (module-level: runs in workers)."""
     from catgrasp_drake.planning.records import PlanParams
-    from catgrasp_drake.station.handwritten import load_handwritten_motion, shifted_motion, with_postures
+    from catgrasp_drake.station.handwritten import load_handwritten_motion, moved_about, shifted_motion, with_postures
     from catgrasp_drake.station.scenario import load_scenario, random_placement, with_instance
     from catgrasp_drake.trial import run_grasp_trial
 
@@ -75,6 +76,8 @@ def sweep_task(spec: dict) -> dict:
     if spec.get("shift") or spec.get("rotate"):
         motion = shifted_motion(motion, category, instance, spec.get("shift") or (0, 0, 0),
                                 spec.get("rotate") or (0, 0, 0), annotations_dir=model_dir)
+    if spec.get("yaw"):  # about the object frame's vertical axis: the grasp a yaw error of this much would give
+        motion = moved_about(motion, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (0.0, 0.0, spec["yaw"]))
     params = PlanParams(**spec.get("plan", {}))
     if spec.get("no_object_clearance"):
         params = dataclasses.replace(params, object_penetration_tol=None)
@@ -166,6 +169,9 @@ def main(argv=None) -> int:
                     help="move every grasp by this (m, object frame)")
     ap.add_argument("--rotate", type=float, nargs=3, metavar=("RX", "RY", "RZ"),
                     help="turn every grasp about its anchor region's centre (deg, object-frame x-y-z Euler angles)")
+    ap.add_argument("--yaw", type=float, default=0.0, metavar="DEG",
+                    help="then turn every grasp about the object frame's vertical axis (deg): what a perception "
+                         "whose yaw is off by this much would execute")
     ap.add_argument("--posture", nargs="+", action="extend", default=[], metavar="NAME.JOINT=RAD",
                     help="set one joint of one posture of every grasp, e.g. closed.svh_pinky=0.856 (rad)")
     ap.add_argument("--model", type=Path, help="a trained model: its learned grasp on each of its training "
@@ -187,6 +193,8 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
 
     variant = {k: list(v) for k, v in (("shift", args.shift), ("rotate", args.rotate)) if v and any(v)}
+    if args.yaw:
+        variant["yaw"] = args.yaw
     if args.posture:
         variant["postures"] = posture_overrides(args.posture, ap.error)
     instances = {c: list_instances(c) for c in args.categories}
