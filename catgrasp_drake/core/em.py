@@ -73,7 +73,8 @@ def sigma2_update(X: np.ndarray, T: np.ndarray, e) -> float:
 
 def em_loop(X: np.ndarray, e_step: Callable, m_step: Callable[..., MStep], start: MStep, sigma2: float, *,
             n_iter: int, tol: float, sigma2_floor: float, stop_at_floor: bool = True, min_mass: float = 1e-300,
-            k_start: int = 0, callback: Callable[[int, np.ndarray, float, float], object] | None = None) -> EMResult:
+            k_start: int = 0, f_prev: float = math.inf,
+            callback: Callable[[int, np.ndarray, float, float], object] | None = None) -> EMResult:
     """EM iterations ``k = k_start .. n_iter - 1`` on targets ``X`` (N, D) from parameters ``start``.
 
     ``e_step(k, m, sigma2)`` gives the E-step at parameters ``m`` (the last :class:`MStep`);
@@ -81,11 +82,12 @@ def em_loop(X: np.ndarray, e_step: Callable, m_step: Callable[..., MStep], start
     M-step it is ``max(sigma2_update(X, m.centres, e), sigma2_floor)``, and reaching the floor ends the
     loop if ``stop_at_floor``; an E-step whose posterior mass ``Np`` is at most ``min_mass`` ends it too
     (every target an outlier). ``callback(k + 1, m.centres, sigma2, f)`` after each M-step, with ``f``
-    the objective of the E-step before it. ``k_start`` resumes an earlier run (``f_prev`` restarts at
-    inf: with ``tol`` 0 the result equals that of one uninterrupted run).
+    the objective of the E-step before it. ``k_start`` resumes an earlier run that stopped at ``n_iter`` =
+    ``k_start``; ``f_prev``, that run's last ``objective``, makes the first convergence test the one the
+    uninterrupted run would have made (left at inf, the test starts afresh: with ``tol`` 0 the same).
     """
     N = X.shape[0]
-    m, e, f, f_prev, done, stop = start, None, math.inf, math.inf, 0, "max_iter"
+    m, e, f, done, stop = start, None, math.inf, 0, "max_iter"
     for k in range(k_start, n_iter):
         e = e_step(k, m, sigma2)
         f = e.nll + m.penalty

@@ -107,6 +107,16 @@ SEARCH_F32_TOL = 1e-3
 #: bench_inference.py compare against them): every start searched to the end, two hidden-point removals
 #: per start, float64 throughout, the visibility recomputed on schedule however little the model moved.
 LEGACY_SEARCH = {"yaw_keep": None, "recenter_visibility": True, "search_float32": False, "visibility_move": 0.0}
+#: Shape hypotheses (``hypotheses`` > 1) whose energy, after DROP_AFTER refine iterations, is more than
+#: DROP_ENERGY nats above the lowest are not refined further. Chosen on the committed instances (3 views each,
+#: 3 hypotheses; ``python benchmarks/results/experiments/s34_hypothesis_drop/probe.py``): from iteration 16
+#: to the end the gap between a hypothesis and the best closed by at most 126 nats (from iteration 8: 328, and
+#: a spray-bottle hypothesis 328 nats behind there became the best), and a dropped hypothesis ended at least
+#: 150 nats behind, a posterior weight below 1e-4 (``prediction.POSTERIOR_TEMPERATURE`` 15 nats). The MAP fit
+#: and every grasp candidate of weight above 1e-3 were unchanged on all 135 views. On drills and spray bottles
+#: the other hypotheses sit 150-450 nats behind and are dropped; on mugs (5-60 nats) none is.
+DROP_ENERGY = 200.0
+DROP_AFTER = 16
 
 
 @dataclass(frozen=True, eq=False)
@@ -193,6 +203,7 @@ class _State:
     converged: bool = False
     visible: np.ndarray | None = None
     yaw: float = 0.0
+    T_visible: np.ndarray | None = None  # the model points (observation frame) where ``visible`` was computed
 
 
 class _Fit(NamedTuple):
@@ -283,17 +294,19 @@ class _Problem:
     def run(self, st: _State, O, n_iter, tol, vis_every=1, pool=None, k_start=0, float32=False, vis_move=0.0):
         """EM iterations ``k_start .. n_iter - 1`` from state ``st`` on observation subset O.
 
-        ``k_start`` > 0 resumes a run stopped after ``k_start`` iterations (the
-        visibility schedule continues; with ``tol`` 0 the result is that of one
-        uninterrupted run). ``float32``: the E-step in float32 while
+        ``k_start`` > 0 resumes a run stopped after ``k_start`` iterations (its
+        last energy, visibility and where it was computed are the state's): the
+        result is that of one uninterrupted run. ``float32``: the E-step in float32 while
         :data:`SEARCH_F32_TOL` allows. ``vis_move`` (m) > 0: a scheduled
         visibility update is skipped while no model point has moved more than
         that since the last one.
         """
         N = len(O)
         fit = self.fit(st.x, st.R, st.t, st.s)
+        resume = k_start > 0 and st.visible is not None
         vis = st.visible if st.visible is not None else self.visible(fit.T)
-        T_vis, idx = fit.T, None
+        T_vis = st.T_visible if resume and st.T_visible is not None else fit.T
+        idx = None
         if float32:
             ctr = O.mean(axis=0)
             Oc = O - ctr
@@ -322,14 +335,15 @@ class _Problem:
 
         start = MStep(fit.T, 0.5 * self.prior * float(st.x @ st.x), fit)
         r = em_loop(O, e_step, m_step, start, st.sigma2, n_iter=n_iter, tol=tol, sigma2_floor=SIGMA2_MIN_M2,
-                    stop_at_floor=False, min_mass=1e-9, k_start=k_start)
+                    stop_at_floor=False, min_mass=1e-9, k_start=k_start,
+                    f_prev=st.energy if resume else math.inf)
         st.x, st.R, st.t, st.s = r.m.params[:4]
         st.sigma2 = r.sigma2
         if r.e is not None:
             st.energy = r.objective
         st.iterations += r.iterations
         st.converged = st.converged or r.converged
-        st.visible = vis
+        st.visible, st.T_visible = vis, T_vis
         return st
 
 
@@ -441,6 +455,8 @@ def infer_latent_pose(
     hypotheses: int = 1,
     upright: bool = False,
     fit_threads: int | None = 1,
+    drop_energy: float | None = DROP_ENERGY,
+    drop_after: int = DROP_AFTER,
 ) -> InferenceResult:
     """Fit latent x and a similarity (R, t, s) of ``space`` to ``observed`` (N, 3), metres.
 
@@ -488,6 +504,10 @@ def infer_latent_pose(
     is the same to the bit whatever the count. Measured on the camera's clouds (``bench_transfer.py
     --settings new parallel``, 2 cores): 4-12 % faster on a quiet machine, 2x slower when another process
     keeps the cores busy (each EM iteration is hundreds of small numpy calls, bound by the interpreter).
+    ``drop_energy`` (nats; None: never) and ``drop_after``: with ``hypotheses`` > 1, every hypothesis is refined
+    ``drop_after`` iterations first; those whose energy is then more than ``drop_energy`` above the lowest stop
+    there (their result is that unfinished fit), the others are refined on, each exactly as without the pause
+    (:data:`DROP_ENERGY`: the best fit and every hypothesis that keeps a posterior weight are unchanged).
     """
     t0 = time.perf_counter()
     if not isinstance(space, ShapeSpace):
@@ -532,6 +552,9 @@ def infer_latent_pose(
             residual_beta = kernel_width(residual_beta, "residual_beta")
         residual_lam = positive(residual_lam, "residual_lam")
     n_hypotheses = count(hypotheses, "hypotheses", 1, MAX_YAW_CANDIDATES)
+    if drop_energy is not None:
+        drop_energy = positive(drop_energy, "drop_energy")
+    drop_after = count(drop_after, "drop_after", 1)
     fit_threads = n_threads() if fit_threads is None else count(fit_threads, "fit_threads", 1, 64)
     prob = _Problem(space, O, camera, w, prior, (lo, hi), radius_factor, bool(fit_scale), bool(upright))
 
@@ -589,14 +612,23 @@ def infer_latent_pose(
         O_fit = _subsample(O, max_points)
         # a pool even on one core: whether the E-step is split into blocks must not depend on the machine
         pool = ThreadPoolExecutor(n_threads())
-        def refine(rank):
-            st = refine_first[rank]
-            st.visible = None
-            st = prob.run(st, O_fit, max_iter, tol, vis_every=visibility_every, pool=pool, vis_move=visibility_move)
-            return _finish(prob, st, O, w, space, residual_cpd, residual_beta, residual_lam, rank)
+        dropping = drop_energy is not None and len(refine_first) > 1 and drop_after < max_iter
+        first_iter = drop_after if dropping else max_iter
+
+        def refine(st, k_start=0):
+            if k_start == 0:
+                st.visible = None
+            return prob.run(st, O_fit, first_iter if k_start == 0 else max_iter, tol, vis_every=visibility_every,
+                            pool=pool, vis_move=visibility_move, k_start=k_start)
 
         try:
-            finished = list(each(refine, range(len(refine_first))))
+            list(each(refine, refine_first))
+            if dropping:  # hypotheses far behind the best stop here; the rest go on exactly as if never paused
+                best_energy = min(st.energy for st in refine_first)
+                go_on = [st for st in refine_first if not st.converged and st.energy <= best_energy + drop_energy]
+                list(each(lambda st: refine(st, first_iter), go_on))
+            finished = list(each(lambda rank: _finish(prob, refine_first[rank], O, w, space, residual_cpd,
+                                                      residual_beta, residual_lam, rank), range(len(refine_first))))
         finally:
             if pool is not None:
                 pool.shutdown()

@@ -193,6 +193,37 @@ def test_the_fit_is_the_same_whether_its_starts_and_hypotheses_run_side_by_side_
             infer_latent_pose(space, T[vis], camera_position=cam, fit_threads=bad)
 
 
+def test_hypotheses_far_behind_stop_early_and_the_others_are_refined_as_if_never_paused(space):
+    """The refine pauses every hypothesis after ``drop_after`` iterations: resumed, a fit ends with the bits of
+    an uninterrupted refine (a threshold nothing reaches changes no hypothesis), and a hypothesis further than
+    ``drop_energy`` behind the best stops there, the best untouched."""
+    T, vis, cam, _ = _observe(space, space.latent_train[3], 2.0, np.array([0.02, 0.3, 0.0]), 1.0, az_deg=120)
+    kw = dict(camera_position=cam, yaw_candidates=8, hypotheses=3, upright=True)
+    full = infer_latent_pose(space, T[vis], drop_energy=None, **kw)
+    paused = infer_latent_pose(space, T[vis], drop_energy=1e9, drop_after=3, **kw)
+    assert len(full.hypotheses) == len(paused.hypotheses) >= 2
+    assert all(h.iterations > 3 for h in full.hypotheses)  # every fit went on past the pause
+    for a, b in zip(full.hypotheses, paused.hypotheses):
+        assert a.energy == b.energy and a.iterations == b.iterations
+        for u, v in ((a.x, b.x), (a.R, b.R), (a.t, b.t), (a.completed, b.completed)):
+            np.testing.assert_array_equal(u, v)
+    # a threshold every other hypothesis exceeds: only the best at the pause goes on, as in the full refine
+    T, vis, cam, _ = _observe(space, space.latent_train[5], -2.5, np.array([0.02, 0.3, 0.0]), 1.0, az_deg=80)
+    kw["camera_position"] = cam
+    full = infer_latent_pose(space, T[vis], drop_energy=None, **kw)
+    dropped = infer_latent_pose(space, T[vis], drop_energy=1e-3, drop_after=3, **kw)
+    assert len(full.hypotheses) == len(dropped.hypotheses) == 3
+    assert dropped.energy == full.energy
+    np.testing.assert_array_equal(dropped.x, full.x)
+    np.testing.assert_array_equal(dropped.completed, full.completed)
+    rest = dropped.hypotheses[1:]
+    assert rest and all(h.iterations == 3 and not h.converged for h in rest)
+    assert all(h.energy > dropped.energy + 1e-3 for h in rest)
+    for bad in ({"drop_energy": 0.0}, {"drop_energy": -5.0}, {"drop_after": 0}, {"drop_after": 2.5}):
+        with pytest.raises(InputError, match="drop_"):
+            infer_latent_pose(space, T[vis], **kw, **bad)
+
+
 def test_two_views_merged_are_fitted_with_the_union_of_their_visibility(space):
     """Two cameras 90 deg apart: each sees part of the object, the merged cloud more. A model point counts as
     seen when either camera sees it; one camera given as (1, 3) is the single-camera fit bit for bit."""
