@@ -155,7 +155,8 @@ def plant_config(scenario: Scenario) -> MultibodyPlantConfig:
     return MultibodyPlantConfig(time_step=p.time_step,
                                 discrete_contact_approximation=p.discrete_contact_approximation,
                                 contact_model=p.contact_model,
-                                penetration_allowance=p.penetration_allowance)
+                                penetration_allowance=p.penetration_allowance,
+                                sap_near_rigid_threshold=p.sap_near_rigid_threshold)
 
 
 def add_table(plant: MultibodyPlant, scenario: Scenario) -> ModelInstanceIndex:

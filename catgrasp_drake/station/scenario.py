@@ -185,6 +185,9 @@ class PlantSpec:
     contact_model: str = _f("hydroelastic_with_fallback",
                             _one_of("hydroelastic_with_fallback", "hydroelastic", "point"))
     penetration_allowance: float = _f(1e-3, _POSITIVE)
+    #: SAP's near-rigid regime threshold (MultibodyPlantConfig; Drake's default 1.0, 0 turns it off): a speed
+    #: lever of issue 17, measured by ``benchmarks/bench_fidelity.py --lever sap_near_rigid_threshold=V``.
+    sap_near_rigid_threshold: float = _f(1.0, _NONNEG)
     #: Physics-sensitivity knobs (defaults: the station as tuned): the hand's effort limits times
     #: this factor (1/1.7: the real SVH's), and the object's Coulomb friction replaced (None: its SDF's).
     hand_effort_scale: float = _f(1.0, _POSITIVE)

@@ -57,3 +57,18 @@ def test_object_mass_scale_weighs_the_object_in_the_simulation_context():
     G1 = h.object_body.CalcSpatialInertiaInBodyFrame(plant_ctx).CopyToFullMatrix6()
     np.testing.assert_allclose(G1, 1.3 * G0, rtol=1e-12, atol=1e-15)  # the same shape of inertia, 30 % more
     assert scenario_from_dict("x", {"plant": {"object_mass_scale": 0.7}}).plant.object_mass_scale == 0.7
+
+
+def test_sap_near_rigid_threshold_reaches_the_plant_and_bad_values_are_refused():
+    import pytest
+
+    from catgrasp_drake.errors import InputError
+
+    base = load_scenario("drill_default")
+    assert add_station(DiagramBuilder(), base).plant.get_sap_near_rigid_threshold() == 1.0  # Drake's default
+    off = scenario_from_dict("x", {"plant": {"sap_near_rigid_threshold": 0.0}})
+    assert off.plant.sap_near_rigid_threshold == 0.0
+    h = add_station(DiagramBuilder(), base.replace(plant=off.plant))
+    assert h.plant.get_sap_near_rigid_threshold() == 0.0
+    with pytest.raises(InputError, match="sap_near_rigid_threshold"):
+        scenario_from_dict("x", {"plant": {"sap_near_rigid_threshold": -1.0}})
