@@ -44,6 +44,27 @@ def test_worker_processes_share_the_cores_between_their_threads(tmp_path, monkey
     assert n_threads() == 1
 
 
+def worker_pid(spec: dict) -> dict:
+    """A task reporting its worker process."""
+    time.sleep(0.05)
+    return {"pid": os.getpid()}
+
+
+@pytest.mark.skipif(sys.version_info < (3, 11), reason="ProcessPoolExecutor(max_tasks_per_child=) needs 3.11")
+def test_a_worker_process_is_replaced_after_its_share_of_tasks(monkeypatch):
+    """Workers are recycled every WORKER_TASKS tasks (Drake's Python systems are never freed, so a long-lived
+    worker only grows): 2 workers, 2 tasks each, 8 tasks -> 4 processes, each running exactly 2 tasks."""
+    import collections
+
+    from catgrasp_drake import runner
+
+    monkeypatch.setattr(runner, "WORKER_TASKS", 2)
+    out = run_tasks(worker_pid, [{"i": i} for i in range(8)], cache_dir=None, code_version="v", workers=2)
+    per_process = collections.Counter(o.result["pid"] for o in out)
+    assert sorted(per_process.values()) == [2, 2, 2, 2]
+    assert os.getpid() not in per_process
+
+
 def test_runs_in_processes_in_spec_order_and_caches(tmp_path):
     specs = [{"x": i} for i in range(6)]
     out = run_tasks(square, specs, cache_dir=tmp_path, code_version="v1", workers=2)
