@@ -114,8 +114,8 @@ def _run_one(fn: Callable[[dict], dict], spec: dict) -> dict:
 #: are never freed (their port callbacks close over the system; a known pydrake issue, RobotLocomotion/drake
 #: #22515, #24162): every grasp trial leaves its diagrams alive, ~45 MB, and a 648-trial benchmark grew two
 #: workers to 11 GB each and stalled a 23 GB machine (session 34). Replaced every 20 tasks, a worker stays under
-#: ~1.2 GB; the respawn (imports, the model) costs ~3 s per 20 trials of 2-8 s. (Python >= 3.11; on 3.10 the
-#: workers live for the whole run.)
+#: ~1.3 GB; a respawn costs ~2 s per 20 trials of 2-8 s each (imports and the model 0.7-0.9 s, the first
+#: trial's warm-up ~1 s). (Python >= 3.11; on 3.10 the workers live for the whole run.)
 WORKER_TASKS = 20
 
 #: Format of the cache files (``TaskCache``).
