@@ -28,14 +28,19 @@ def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     recs = load(argv[0])
     committed = load(argv[1] if len(argv) > 1 else "benchmarks/results/fresh_seed20261205.jsonl")
-    key = lambda r: (r["category"], r["method"], r["instance"], r["trial"], r.get("view", "single"))  # noqa: E731
+    key = lambda r: (r["category"], r["method"], r["instance"], r["trial"], r.get("view", "single"),  # noqa: E731
+                     r.get("data_seed"))
     old = {key(r): r for r in committed}
     by = {key(r): r for r in recs}
     for category in ("drill", "spray_bottle", "mug"):
         print(f"\n{category}")
-        for trials, label in ((range(6), "placements 0-5"), (range(3, 6), "placements 3-5 (new)")):
+        n = 1 + max(k[3] for k in by)
+        for trials, label in ((range(n), f"placements 0-{n - 1}"), (range(3, n), f"placements 3-{n - 1} (new)")):
             keys = sorted({(k[2], k[3]) for k in by if k[0] == category and k[3] in trials})
-            f = {m: [bool(by[(category, m, i, t, "single")]["functional"]) for i, t in keys]
+            if not keys:
+                continue
+            seed = next(k[5] for k in by if k[0] == category)
+            f = {m: [bool(by[(category, m, i, t, "single", seed)]["functional"]) for i, t in keys]
                  for m in ("latent", "nearest", "rigid")}
             inst = [i for i, _ in keys]
             line = ", ".join(f"{m} {sum(v)}/{len(v)}" for m, v in f.items())
@@ -50,7 +55,8 @@ def main(argv=None) -> int:
                 total += 1
                 same += (r["grasp"], r["functional"], r["reason"]) == (old[k]["grasp"], old[k]["functional"],
                                                                        old[k]["reason"])
-        print(f"  placements 0-2: {same}/{total} verdicts as committed")
+        if total:
+            print(f"  placements 0-2: {same}/{total} verdicts as committed")
     return 0
 
 
