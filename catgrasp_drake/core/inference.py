@@ -615,18 +615,18 @@ def infer_latent_pose(
         dropping = drop_energy is not None and len(refine_first) > 1 and drop_after < max_iter
         first_iter = drop_after if dropping else max_iter
 
-        def refine(st, k_start=0):
+        def refine(st, n_iter, k_start=0):  # iterations k_start .. n_iter - 1; from 0 with fresh visibility
             if k_start == 0:
                 st.visible = None
-            return prob.run(st, O_fit, first_iter if k_start == 0 else max_iter, tol, vis_every=visibility_every,
-                            pool=pool, vis_move=visibility_move, k_start=k_start)
+            return prob.run(st, O_fit, n_iter, tol, vis_every=visibility_every, pool=pool, vis_move=visibility_move,
+                            k_start=k_start)
 
         try:
-            list(each(refine, refine_first))
+            list(each(lambda st: refine(st, first_iter), refine_first))
             if dropping:  # hypotheses far behind the best stop here; the rest go on exactly as if never paused
                 best_energy = min(st.energy for st in refine_first)
                 go_on = [st for st in refine_first if not st.converged and st.energy <= best_energy + drop_energy]
-                list(each(lambda st: refine(st, first_iter), go_on))
+                list(each(lambda st: refine(st, max_iter, first_iter), go_on))
             finished = list(each(lambda rank: _finish(prob, refine_first[rank], O, w, space, residual_cpd,
                                                       residual_beta, residual_lam, rank), range(len(refine_first))))
         finally:

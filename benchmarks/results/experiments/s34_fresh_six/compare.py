@@ -1,62 +1,38 @@
-"""Session 34: the fresh split (seed 20261205) at six placements, latent against its baselines (measured only).
+"""Session 34: a fresh-split records file, latent against its baselines, with the report's own tables (measured only).
 
-    python benchmarks/results/experiments/s34_fresh_six/compare.py FRESH6.jsonl [COMMITTED.jsonl]
+    python benchmarks/results/experiments/s34_fresh_six/compare.py RECORDS.jsonl [COMMITTED.jsonl]
 
-Prints, per category, functional successes of latent, nearest and rigid + scale over the six placements and
-over the new ones (3-5) alone, latent minus each baseline with its paired 95 % interval (bootstrap over
-instances, ``benchmark.stats.paired_bootstrap``), and how many of placements 0-2 repeat the committed
-records' verdict (``COMMITTED``, default ``benchmarks/results/fresh_seed20261205.jsonl``).
+Prints ``catgrasp report``'s tables (``benchmark.report.benchmark_tables``: every method's rates and latent
+minus each baseline, paired over instances) for all the file's placements, then for placements 3 and up alone
+(the ones the committed records do not hold), then how many of the file's trials repeat the verdict of the
+same trial in ``COMMITTED`` (default ``benchmarks/results/fresh_seed20261205.jsonl``; trials matched by
+category, method, instance, placement, view, physics and data seed).
 """
 
 from __future__ import annotations
 
-import json
 import sys
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[4]))
 
-from catgrasp_drake.benchmark.stats import paired_bootstrap  # noqa: E402
+from catgrasp_drake.benchmark.report import benchmark_tables, load_benchmark_records  # noqa: E402
+from catgrasp_drake.benchmark.stats import PAIR_KEY, pair_records  # noqa: E402
 
-
-def load(path):
-    with open(path) as f:
-        return [r for r in (json.loads(line) for line in f) if "trial" in r]
+VERDICT = ("grasp", "functional", "reason")
 
 
 def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else argv
-    recs = load(argv[0])
-    committed = load(argv[1] if len(argv) > 1 else "benchmarks/results/fresh_seed20261205.jsonl")
-    key = lambda r: (r["category"], r["method"], r["instance"], r["trial"], r.get("view", "single"),  # noqa: E731
-                     r.get("data_seed"))
-    old = {key(r): r for r in committed}
-    by = {key(r): r for r in recs}
-    for category in ("drill", "spray_bottle", "mug"):
-        print(f"\n{category}")
-        n = 1 + max(k[3] for k in by)
-        for trials, label in ((range(n), f"placements 0-{n - 1}"), (range(3, n), f"placements 3-{n - 1} (new)")):
-            keys = sorted({(k[2], k[3]) for k in by if k[0] == category and k[3] in trials})
-            if not keys:
-                continue
-            seed = next(k[5] for k in by if k[0] == category)
-            f = {m: [bool(by[(category, m, i, t, "single", seed)]["functional"]) for i, t in keys]
-                 for m in ("latent", "nearest", "rigid")}
-            inst = [i for i, _ in keys]
-            line = ", ".join(f"{m} {sum(v)}/{len(v)}" for m, v in f.items())
-            diffs = []
-            for m in ("nearest", "rigid"):
-                p = paired_bootstrap(inst, f["latent"], f[m])
-                diffs.append(f"latent - {m} {100 * p.diff:+.1f} pp [{100 * p.low:+.1f}, {100 * p.high:+.1f}]")
-            print(f"  {label}: {line}; " + "; ".join(diffs))
-        same = total = 0
-        for k, r in by.items():
-            if k[0] == category and k[3] < 3 and k in old:
-                total += 1
-                same += (r["grasp"], r["functional"], r["reason"]) == (old[k]["grasp"], old[k]["functional"],
-                                                                       old[k]["reason"])
-        if total:
-            print(f"  placements 0-2: {same}/{total} verdicts as committed")
+    records = load_benchmark_records(argv[0])
+    committed = load_benchmark_records(argv[1] if len(argv) > 1 else "benchmarks/results/fresh_seed20261205.jsonl")
+    print(f"## {argv[0]}: all placements\n\n{benchmark_tables(records)}")
+    later = [r for r in records if r["trial"] >= 3]
+    if later:
+        print(f"## placements 3 and up alone\n\n{benchmark_tables(later)}")
+    pairs = pair_records(records, committed, key=PAIR_KEY + ("method", "data_seed"))
+    same = sum(all(a[f] == b[f] for f in VERDICT) for a, b in zip(pairs.a, pairs.b))
+    print(f"trials also in the committed records: {len(pairs)}; the same verdict: {same}")
     return 0
 
 
