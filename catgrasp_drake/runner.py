@@ -111,8 +111,10 @@ def _run_one(fn: Callable[[dict], dict], spec: dict) -> dict:
 
 
 #: A worker process is replaced by a fresh one after this many tasks. Drake 1.51's Python-defined LeafSystems
-#: are never freed (their port callbacks close over the system; a known pydrake issue, RobotLocomotion/drake
-#: #22515, #24162): every grasp trial leaves its diagrams alive, ~45 MB, and a 648-trial benchmark grew two
+#: are never freed once added to a DiagramBuilder, even one with no ports or callbacks (the builder and the
+#: system name each other, and the builder's C++ side holds the system where the collector cannot see it;
+#: RobotLocomotion/drake #22515, #24162; the canary ``tests/runner/test_runner.py`` says when a Drake release
+#: fixes it): every grasp trial leaves its diagrams alive, ~45 MB, and a 648-trial benchmark grew two
 #: workers to 11 GB each and stalled a 23 GB machine (session 34). Replaced every 20 tasks, a worker stays under
 #: ~1.3 GB; a respawn costs ~2 s per 20 trials of 2-8 s each (imports and the model 0.7-0.9 s, the first
 #: trial's warm-up ~1 s). (Python >= 3.11; on 3.10 the workers live for the whole run.)

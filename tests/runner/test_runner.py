@@ -65,6 +65,31 @@ def test_a_worker_process_is_replaced_after_its_share_of_tasks(monkeypatch):
     assert os.getpid() not in per_process
 
 
+def test_python_leaf_systems_outlive_their_diagram_in_this_drake():
+    """Why WORKER_TASKS exists, checked against the installed Drake (a canary, session 35): a Python-defined
+    LeafSystem with no ports or callbacks at all, added to a DiagramBuilder and built into a diagram, is never
+    freed. The builder and the system name each other in ``_pydrake_internal_ref_cycle_peers``, and the
+    builder's C++ side holds the Python system too, a reference the collector cannot see. So no rewrite of
+    our systems' callbacks can free them. If this fails, Drake has fixed it: drop the recycling, and
+    measure a long ``--workers 0`` run's memory to confirm."""
+    import gc
+    import weakref
+
+    from pydrake.systems.framework import DiagramBuilder, LeafSystem
+
+    class Empty(LeafSystem):
+        pass
+
+    alive = []
+    for _ in range(3):
+        builder = DiagramBuilder()
+        alive.append(weakref.ref(builder.AddSystem(Empty())))
+        diagram = builder.Build()
+        del builder, diagram
+    gc.collect()
+    assert sum(ref() is not None for ref in alive) == 3
+
+
 def test_runs_in_processes_in_spec_order_and_caches(tmp_path):
     specs = [{"x": i} for i in range(6)]
     out = run_tasks(square, specs, cache_dir=tmp_path, code_version="v1", workers=2)
