@@ -1,7 +1,7 @@
 """Does the category's hand-written grasp fit each object? The preshaped hand against its true mesh, no simulation.
 
     python diagrams/hand_fit.py [--categories drill spray_bottle mug] [--objects DIR ...] [--posture preshape]
-                                [--json FILE]
+                                [--closing] [--json FILE]
 
 For each committed instance of ``--categories`` and each imported object
 (``catgrasp import-object``, the stress split's stretched copies under
@@ -15,6 +15,12 @@ the three deepest links, and what the planner will do with it: nothing (within
 its 4 mm tolerance), move the grasp out by so much (and the index finger with it,
 off the trigger), or refuse it (a trial's ``collision_before_closing``). Half a
 second to a second per object; a trial takes 5-10 s.
+
+``--closing`` also prints the order in which the fingers, thumb and palm meet the object as the hand closes
+(``planning.fit.closing_contacts``: the posture stepped from preshape to closed with the hand and object still):
+how far into the closing each arrives, with which link, and whether on the category's functional region (the
+trigger or handle), with the hand where the planner's object clearance puts it -- e.g. the index on the
+trigger's side, or the thumb after the fingers have pushed. About 2 s more per object.
 """
 
 from __future__ import annotations
@@ -29,9 +35,10 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from catgrasp_drake.core.fileio import atomic_write_text  # noqa: E402
-from catgrasp_drake.data.dataset import list_instances  # noqa: E402
-from catgrasp_drake.planning.fit import hand_fit  # noqa: E402
-from catgrasp_drake.station.handwritten import handwritten_trial  # noqa: E402
+from catgrasp_drake.data.dataset import list_instances, load_annotations, read_annotations  # noqa: E402
+from catgrasp_drake.grasping.constraints import load_constraint  # noqa: E402
+from catgrasp_drake.planning.fit import closing_contacts, hand_fit  # noqa: E402
+from catgrasp_drake.station.handwritten import handwritten_trial, moved_about  # noqa: E402
 
 
 def main(argv=None) -> int:
@@ -40,6 +47,8 @@ def main(argv=None) -> int:
                     help="committed instances of these categories (default: all three unless --objects)")
     ap.add_argument("--objects", type=Path, nargs="*", default=[], help="imported objects' directories")
     ap.add_argument("--posture", default="preshape", help="the hand posture checked (open, preshape, closed)")
+    ap.add_argument("--closing", action="store_true",
+                    help="also the order in which fingers, thumb and palm meet the object as the hand closes")
     ap.add_argument("--json", type=Path, default=None, help="also write the rows here")
     args = ap.parse_args(argv)
     categories = args.categories if args.categories is not None else ([] if args.objects else
@@ -59,6 +68,18 @@ def main(argv=None) -> int:
         rows.append({"category": category, "object": name, "depth_mm": round(1000 * fit.depth_m, 2),
                      "link_depths_mm": {k: round(1000 * d, 2) for k, d in fit.link_depths_m.items()},
                      "shift_mm": round(shift_mm, 2), "plannable": fit.plannable})
+        if args.closing:
+            annotations = (load_annotations(category, name) if directory is None
+                           else read_annotations(Path(directory) / "annotations.json"))
+            region = annotations.get("regions", {}).get(load_constraint(category).region)
+            if fit.plannable and np.any(fit.shift_m):  # where the planner will have moved the hand
+                motion = moved_about(motion, np.zeros(3), fit.shift_m)
+            contacts = closing_contacts(scenario, motion, region=region)
+            for c in contacts:
+                print(f"    {c.summary()}")
+            rows[-1]["closing"] = [{"finger": c.finger, "fraction": c.fraction, "link": c.link,
+                                    "point_mm": None if c.point_O is None else [round(1000 * v, 1) for v in c.point_O],
+                                    "in_region": c.in_region} for c in contacts]
     refused = sum(not r["plannable"] for r in rows)
     moved = sum(r["plannable"] and r["shift_mm"] > 0 for r in rows)
     print(f"{len(rows)} objects: {len(rows) - refused - moved} as written, {moved} moved by the planner, "

@@ -6,7 +6,8 @@ hand out, up to ``PlanParams.max_object_shift``, and with it the index finger of
 refuses the grasp (``collision_before_closing``). On real objects and stretched instances the
 category's tucked thumb and curled little finger are where it happens (docs/benchmark.md, sessions
 20 and 22). :func:`hand_fit` says it before any trial: how deep the preshaped hand is, by link, and
-the move the planner will make.
+the move the planner will make. :func:`closing_contacts` follows the hand on from there: the order in which
+the fingers, thumb and palm meet the object as the hand closes, where, and whether on the functional region.
 """
 
 from __future__ import annotations
@@ -94,3 +95,96 @@ def hand_fit(scenario: Scenario, motion_O: GraspMotion, params: PlanParams = Pla
         return HandFit(depths, np.zeros(3), True, float("inf"), params.max_object_shift)
     r = clearance_shift(np.vstack(points), field, tolerance, params.max_object_shift)
     return HandFit(depths, np.asarray(r.shift, float), bool(r.ok), float(tolerance), float(params.max_object_shift))
+
+
+#: The hand's links by finger, as :func:`closing_contacts` names them (the palm: the base and the palm's flex link).
+FINGER_LINKS = {
+    "thumb": ("svh_thumb_base_link", "svh_thumb_proximal_link", "svh_thumb_middle_link", "svh_thumb_distal_link"),
+    "index": ("svh_index_knuckle_link", "svh_index_proximal_link", "svh_index_middle_link", "svh_index_distal_link"),
+    "middle": ("svh_middle_proximal_link", "svh_middle_middle_link", "svh_middle_distal_link"),
+    "ring": ("svh_ring_knuckle_link", "svh_ring_proximal_link", "svh_ring_middle_link", "svh_ring_distal_link"),
+    "pinky": ("svh_pinky_knuckle_link", "svh_pinky_proximal_link", "svh_pinky_middle_link", "svh_pinky_distal_link"),
+    "palm": ("svh_base_link", "svh_palm_flex_link"),
+}
+
+
+@dataclass(frozen=True)
+class FirstContact:
+    """Where one finger (or the palm) first meets the object as the hand closes (frame O, metres).
+
+    ``fraction``: how far along the closing (0 the preshape, 1 the closed posture) its surface first lies
+    inside the object (None: it never does); ``link``: its link that does; ``point_O``: that link's deepest
+    point then; ``in_region``: that point lies within ``region_margin_m`` of the functional region's box
+    (None when no region was given)."""
+
+    finger: str
+    fraction: float | None
+    link: str | None = None
+    point_O: np.ndarray | None = None
+    in_region: bool | None = None
+
+    def summary(self) -> str:
+        if self.fraction is None:
+            return f"{self.finger}: never meets the object"
+        where = {None: "", True: ", on the functional region", False: ", off the functional region"}[self.in_region]
+        p = " ".join(f"{1000 * v:.0f}" for v in self.point_O)
+        return (f"{self.finger}: at {100 * self.fraction:.0f} % of the closing, "
+                f"{self.link.removeprefix('svh_')} at ({p}) mm{where}")
+
+
+def closing_contacts(scenario: Scenario, motion_O: GraspMotion, *, region: dict | None = None, steps: int = 20,
+                     spacing: float = 0.003, region_margin_m: float = 0.002) -> list[FirstContact]:
+    """The order in which the fingers, thumb and palm meet the object of ``scenario`` as ``motion_O``'s hand
+    closes at its ``grasp`` pose, without simulation: the posture goes ``preshape -> closed`` in ``steps``
+    equal steps (as the planner interpolates it) with the hand held still, and each finger's first step
+    with a surface point inside the object's true mesh (the planner's signed-distance grid) is kept.
+
+    A kinematic answer: the object does not move and a finger does not stop where it first touches, so it
+    says which finger arrives first and where -- e.g. the index on the trigger's side rather than its front,
+    or the thumb before the fingers -- not what the contact then does. ``region`` (``{"center",
+    "half_extents"}``, m, O; e.g. the annotated trigger) marks each first contact on or off it. Returns one
+    :class:`FirstContact` per entry of :data:`FINGER_LINKS`, earliest first (never-touching fingers last)."""
+    if not isinstance(motion_O, GraspMotion) or motion_O.frame != "object":
+        raise InputError("motion_O: expected a GraspMotion in the object frame")
+    if isinstance(steps, bool) or not isinstance(steps, int) or steps < 1:
+        raise InputError(f"steps: expected a positive integer, got {steps!r}")
+    mesh = object_mesh_path(scenario.object)
+    if mesh is None:
+        raise InputError(f"closing_contacts: scenario {scenario.name!r} has no object mesh (a primitive object)")
+    box = None
+    if region is not None:
+        try:
+            box = (np.asarray(region["center"], float).reshape(3), np.asarray(region["half_extents"], float).reshape(3))
+        except (KeyError, TypeError, ValueError):
+            raise InputError("region: expected {'center': (3,), 'half_extents': (3,)} in metres") from None
+    finger_of = {link: finger for finger, links in FINGER_LINKS.items() for link in links}
+    pm = make_planning_model(scenario)
+    context = pm.diagram.CreateDefaultContext()
+    plant_context = pm.plant.GetMyMutableContextFromRoot(context)
+    sg_context = pm.scene_graph.GetMyMutableContextFromRoot(context)
+    X_OH = motion_O.pose("grasp")
+    field = true_object_field(str(mesh))
+    q_pre, q_closed = motion_O.posture("preshape"), motion_O.posture("closed")
+    found: dict[str, FirstContact] = {}
+    for k in range(steps + 1):
+        f = k / steps
+        scene = planning_scene(pm.plant, plant_context, pm.scene_graph, sg_context, arm=pm.arm, hand=pm.hand,
+                               object_instance=None, table=pm.table, q_arm_start=pm.q_arm_start,
+                               q_hand=q_pre + f * (q_closed - q_pre))
+        inspector = scene.scene_graph.model_inspector()
+        deepest: dict[str, tuple[float, str, np.ndarray]] = {}
+        for geometry, p_H in hand_surface_samples_H(scene, spacing):
+            link = inspector.GetName(inspector.GetFrameId(geometry)).split("::")[-1]
+            finger = finger_of.get(link)
+            if finger is None or finger in found:
+                continue
+            p_O = p_H @ X_OH[:3, :3].T + X_OH[:3, 3]
+            depth = field(p_O)
+            i = int(np.argmax(depth))
+            if depth[i] > 0.0 and depth[i] > deepest.get(finger, (0.0,))[0]:
+                deepest[finger] = (float(depth[i]), link, p_O[i])
+        for finger, (_, link, p) in deepest.items():
+            in_region = None if box is None else bool(np.all(np.abs(p - box[0]) <= box[1] + region_margin_m))
+            found[finger] = FirstContact(finger, f, link, p, in_region)
+    never = [FirstContact(finger, None) for finger in FINGER_LINKS if finger not in found]
+    return sorted(found.values(), key=lambda c: c.fraction) + never

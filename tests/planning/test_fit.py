@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -13,6 +14,8 @@ from catgrasp_drake.planning.fit import hand_fit
 from catgrasp_drake.station.handwritten import handwritten_trial, load_handwritten_motion
 from catgrasp_drake.station.scenario import load_scenario, with_instance
 from catgrasp_drake.trial import plan_for, trial_diagram
+
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def _fit(category, name, directory=None):
@@ -77,3 +80,49 @@ def test_import_object_reports_the_fit_and_warns_when_the_grasp_cannot_fit(deep_
     line = next(ln for ln in out.splitlines() if ln.strip().startswith("hand fit"))
     assert "inside the object" in line and "refuses the grasp" in line
     assert "expect collision_before_closing" in err
+
+
+# ----------------------------------------------------------------------------- closing_contacts
+def _trigger(name):
+    return json.loads((ROOT / "models" / "objects" / "spray_bottle" / name / "annotations.json").read_text()
+                      )["regions"]["trigger"]
+
+
+def test_closing_contacts_say_which_finger_arrives_first_and_whether_on_the_trigger():
+    from catgrasp_drake.planning.fit import FINGER_LINKS, closing_contacts
+
+    scenario, motion = handwritten_trial("spray_bottle", "spray_bottle_01")
+    contacts = closing_contacts(scenario, motion, region=_trigger("spray_bottle_01"))
+    assert sorted(c.finger for c in contacts) == sorted(FINGER_LINKS)
+    touching = [c.fraction for c in contacts if c.fraction is not None]
+    assert touching == sorted(touching) and all(0.0 <= f <= 1.0 for f in touching)
+    index = next(c for c in contacts if c.finger == "index")
+    # the spray grasp's index sweeps onto the trigger early in the closing (14/17 committed bottles pressed)
+    assert index.in_region is True and index.fraction <= 0.2
+    assert index.link.startswith("svh_index_") and "on the functional region" in index.summary()
+    assert all(c.in_region is None for c in closing_contacts(scenario, motion))  # no region: not judged
+
+
+def test_backing_the_hand_away_delays_every_first_contact():
+    from catgrasp_drake.planning.fit import closing_contacts
+    from catgrasp_drake.station.handwritten import moved_about
+
+    scenario, motion = handwritten_trial("spray_bottle", "spray_bottle_01")
+    palm_O = motion.pose("grasp")[:3, 1]  # H +y: the approach direction, into the object
+    near = {c.finger: c.fraction for c in closing_contacts(scenario, motion)}
+    far = {c.finger: c.fraction for c in closing_contacts(scenario, moved_about(motion, np.zeros(3), -0.03 * palm_O))}
+    for finger, f in far.items():
+        assert f is None or (near[finger] is not None and f >= near[finger]), finger
+    assert far["palm"] is None and near["palm"] == 0.0  # the palm rests on the neck only when the hand is there
+
+
+def test_closing_contacts_refuse_bad_input():
+    from catgrasp_drake.planning.fit import closing_contacts
+
+    scenario, motion = handwritten_trial("spray_bottle", "spray_bottle_01")
+    with pytest.raises(InputError, match="steps"):
+        closing_contacts(scenario, motion, steps=0)
+    with pytest.raises(InputError, match="region"):
+        closing_contacts(scenario, motion, region={"center": [0, 0]})
+    with pytest.raises(InputError, match="no object mesh"):
+        closing_contacts(load_scenario("cylinder_test"), motion)
