@@ -14,4 +14,7 @@ run V2_pitch-10 --rotate -10 0 0 --shift 0 0 -0.012
 run V4_yaw+10 --rotate 0 0 10 --shift -0.01 0 0
 run V5_yaw-10 --rotate 0 0 -10 --shift 0.01 0 0
 run V3_pitch+10 --rotate 10 0 0 --shift 0 0 0.012
+run P1_close_slow --plan close_time=1.6
+run P2_close_fast --plan close_time=0.4
+run P3_clear_1mm --plan object_penetration_tol=0.001
 echo DONE
