@@ -35,7 +35,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from catgrasp_drake.core.fileio import atomic_write_text  # noqa: E402
-from catgrasp_drake.data.dataset import list_instances, load_annotations, read_annotations  # noqa: E402
+from catgrasp_drake.data.dataset import list_instances  # noqa: E402
 from catgrasp_drake.grasping.constraints import load_constraint  # noqa: E402
 from catgrasp_drake.planning.fit import closing_contacts, hand_fit  # noqa: E402
 from catgrasp_drake.station.handwritten import handwritten_trial, moved_about  # noqa: E402
@@ -69,9 +69,7 @@ def main(argv=None) -> int:
                      "link_depths_mm": {k: round(1000 * d, 2) for k, d in fit.link_depths_m.items()},
                      "shift_mm": round(shift_mm, 2), "plannable": fit.plannable})
         if args.closing:
-            annotations = (load_annotations(category, name) if directory is None
-                           else read_annotations(Path(directory) / "annotations.json"))
-            region = annotations.get("regions", {}).get(load_constraint(category).region)
+            region = scenario.object.annotations().get("regions", {}).get(load_constraint(category).region)
             if fit.plannable and np.any(fit.shift_m):  # where the planner will have moved the hand
                 motion = moved_about(motion, np.zeros(3), fit.shift_m)
             contacts = closing_contacts(scenario, motion, region=region)

@@ -64,30 +64,41 @@ class HandFit:
         return f"{head} (deepest links, mm: {links}); {action}"
 
 
+def _hand_against_object(scenario: Scenario, motion_O: GraspMotion, caller: str):
+    """``(link_points_O, field)`` for ``motion_O``'s hand at its ``grasp`` pose on ``scenario``'s object:
+    ``link_points_O(q_hand, spacing)`` lists ``(link name, surface points (n, 3) in O)`` of the hand in posture
+    ``q_hand``; ``field`` is the object's signed-distance grid (positive inside, m; the planner's). InputError
+    for a motion not in the object frame or an object without a mesh (a primitive)."""
+    if not isinstance(motion_O, GraspMotion) or motion_O.frame != "object":
+        raise InputError("motion_O: expected a GraspMotion in the object frame")
+    mesh = object_mesh_path(scenario.object)
+    if mesh is None:
+        raise InputError(f"{caller}: scenario {scenario.name!r} has no object mesh (a primitive object)")
+    pm = make_planning_model(scenario)
+    context = pm.diagram.CreateDefaultContext()
+    plant_context = pm.plant.GetMyMutableContextFromRoot(context)
+    sg_context = pm.scene_graph.GetMyMutableContextFromRoot(context)
+    X_OH = motion_O.pose("grasp")
+
+    def link_points_O(q_hand, spacing):
+        scene = planning_scene(pm.plant, plant_context, pm.scene_graph, sg_context, arm=pm.arm, hand=pm.hand,
+                               object_instance=None, table=pm.table, q_arm_start=pm.q_arm_start, q_hand=q_hand)
+        inspector = scene.scene_graph.model_inspector()
+        return [(inspector.GetName(inspector.GetFrameId(geometry)).split("::")[-1], p_H @ X_OH[:3, :3].T + X_OH[:3, 3])
+                for geometry, p_H in hand_surface_samples_H(scene, spacing)]
+
+    return link_points_O, true_object_field(str(mesh))
+
+
 def hand_fit(scenario: Scenario, motion_O: GraspMotion, params: PlanParams = PlanParams(),
              posture: str = "preshape", spacing: float = 0.003) -> HandFit:
     """The fit of ``motion_O``'s hand (in posture ``posture``, at its ``grasp`` pose, OBJECT frame) on the
     object of ``scenario`` (its true mesh, as the planner's object clearance sees it); hand surface points
     every ``spacing`` m. InputError for a primitive object (no mesh) or a motion not in the object frame."""
-    if not isinstance(motion_O, GraspMotion) or motion_O.frame != "object":
-        raise InputError("motion_O: expected a GraspMotion in the object frame")
-    mesh = object_mesh_path(scenario.object)
-    if mesh is None:
-        raise InputError(f"hand_fit: scenario {scenario.name!r} has no object mesh (a primitive object)")
-    pm = make_planning_model(scenario)
-    context = pm.diagram.CreateDefaultContext()
-    scene = planning_scene(pm.plant, pm.plant.GetMyMutableContextFromRoot(context), pm.scene_graph,
-                           pm.scene_graph.GetMyMutableContextFromRoot(context), arm=pm.arm, hand=pm.hand,
-                           object_instance=None, table=pm.table, q_arm_start=pm.q_arm_start,
-                           q_hand=motion_O.posture(posture))
-    inspector = scene.scene_graph.model_inspector()
-    X_OH = motion_O.pose("grasp")
-    field = true_object_field(str(mesh))
+    link_points_O, field = _hand_against_object(scenario, motion_O, "hand_fit")
     depths: dict[str, float] = {}
     points = []
-    for geometry, p_H in hand_surface_samples_H(scene, spacing):
-        p_O = p_H @ X_OH[:3, :3].T + X_OH[:3, 3]
-        link = inspector.GetName(inspector.GetFrameId(geometry)).split("::")[-1]
+    for link, p_O in link_points_O(motion_O.posture(posture), spacing):
         depths[link] = max(depths.get(link, -np.inf), float(field(p_O).max()))
         points.append(p_O)
     tolerance = params.object_penetration_tol
@@ -95,7 +106,6 @@ def hand_fit(scenario: Scenario, motion_O: GraspMotion, params: PlanParams = Pla
         return HandFit(depths, np.zeros(3), True, float("inf"), params.max_object_shift)
     r = clearance_shift(np.vstack(points), field, tolerance, params.max_object_shift)
     return HandFit(depths, np.asarray(r.shift, float), bool(r.ok), float(tolerance), float(params.max_object_shift))
-
 
 #: The hand's links by finger, as :func:`closing_contacts` names them (the palm: the base and the palm's flex link).
 FINGER_LINKS = {
@@ -144,44 +154,28 @@ def closing_contacts(scenario: Scenario, motion_O: GraspMotion, *, region: dict 
     or the thumb before the fingers -- not what the contact then does. ``region`` (``{"center",
     "half_extents"}``, m, O; e.g. the annotated trigger) marks each first contact on or off it. Returns one
     :class:`FirstContact` per entry of :data:`FINGER_LINKS`, earliest first (never-touching fingers last)."""
-    if not isinstance(motion_O, GraspMotion) or motion_O.frame != "object":
-        raise InputError("motion_O: expected a GraspMotion in the object frame")
     if isinstance(steps, bool) or not isinstance(steps, int) or steps < 1:
         raise InputError(f"steps: expected a positive integer, got {steps!r}")
-    mesh = object_mesh_path(scenario.object)
-    if mesh is None:
-        raise InputError(f"closing_contacts: scenario {scenario.name!r} has no object mesh (a primitive object)")
     box = None
     if region is not None:
         try:
             box = (np.asarray(region["center"], float).reshape(3), np.asarray(region["half_extents"], float).reshape(3))
         except (KeyError, TypeError, ValueError):
             raise InputError("region: expected {'center': (3,), 'half_extents': (3,)} in metres") from None
+    link_points_O, field = _hand_against_object(scenario, motion_O, "closing_contacts")
     finger_of = {link: finger for finger, links in FINGER_LINKS.items() for link in links}
-    pm = make_planning_model(scenario)
-    context = pm.diagram.CreateDefaultContext()
-    plant_context = pm.plant.GetMyMutableContextFromRoot(context)
-    sg_context = pm.scene_graph.GetMyMutableContextFromRoot(context)
-    X_OH = motion_O.pose("grasp")
-    field = true_object_field(str(mesh))
     q_pre, q_closed = motion_O.posture("preshape"), motion_O.posture("closed")
     found: dict[str, FirstContact] = {}
     for k in range(steps + 1):
         f = k / steps
-        scene = planning_scene(pm.plant, plant_context, pm.scene_graph, sg_context, arm=pm.arm, hand=pm.hand,
-                               object_instance=None, table=pm.table, q_arm_start=pm.q_arm_start,
-                               q_hand=q_pre + f * (q_closed - q_pre))
-        inspector = scene.scene_graph.model_inspector()
-        deepest: dict[str, tuple[float, str, np.ndarray]] = {}
-        for geometry, p_H in hand_surface_samples_H(scene, spacing):
-            link = inspector.GetName(inspector.GetFrameId(geometry)).split("::")[-1]
+        deepest: dict[str, tuple[float, str, np.ndarray]] = {}  # finger -> its deepest point inside, this step
+        for link, p_O in link_points_O(q_pre + f * (q_closed - q_pre), spacing):
             finger = finger_of.get(link)
             if finger is None or finger in found:
                 continue
-            p_O = p_H @ X_OH[:3, :3].T + X_OH[:3, 3]
             depth = field(p_O)
             i = int(np.argmax(depth))
-            if depth[i] > 0.0 and depth[i] > deepest.get(finger, (0.0,))[0]:
+            if depth[i] > deepest.get(finger, (0.0,))[0]:
                 deepest[finger] = (float(depth[i]), link, p_O[i])
         for finger, (_, link, p) in deepest.items():
             in_region = None if box is None else bool(np.all(np.abs(p - box[0]) <= box[1] + region_margin_m))

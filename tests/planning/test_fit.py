@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -14,8 +13,6 @@ from catgrasp_drake.planning.fit import hand_fit
 from catgrasp_drake.station.handwritten import handwritten_trial, load_handwritten_motion
 from catgrasp_drake.station.scenario import load_scenario, with_instance
 from catgrasp_drake.trial import plan_for, trial_diagram
-
-ROOT = Path(__file__).resolve().parents[2]
 
 
 def _fit(category, name, directory=None):
@@ -83,16 +80,11 @@ def test_import_object_reports_the_fit_and_warns_when_the_grasp_cannot_fit(deep_
 
 
 # ----------------------------------------------------------------------------- closing_contacts
-def _trigger(name):
-    return json.loads((ROOT / "models" / "objects" / "spray_bottle" / name / "annotations.json").read_text()
-                      )["regions"]["trigger"]
-
-
 def test_closing_contacts_say_which_finger_arrives_first_and_whether_on_the_trigger():
     from catgrasp_drake.planning.fit import FINGER_LINKS, closing_contacts
 
     scenario, motion = handwritten_trial("spray_bottle", "spray_bottle_01")
-    contacts = closing_contacts(scenario, motion, region=_trigger("spray_bottle_01"))
+    contacts = closing_contacts(scenario, motion, region=scenario.object.annotations()["regions"]["trigger"])
     assert sorted(c.finger for c in contacts) == sorted(FINGER_LINKS)
     touching = [c.fraction for c in contacts if c.fraction is not None]
     assert touching == sorted(touching) and all(0.0 <= f <= 1.0 for f in touching)

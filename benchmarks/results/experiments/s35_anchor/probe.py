@@ -23,7 +23,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[4]))
 
 from catgrasp_drake.benchmark.runner import stretched_objects, trial_placement  # noqa: E402
 from catgrasp_drake.category_model import CategoryModel  # noqa: E402
-from catgrasp_drake.data.dataset import INSTANCE_COUNTS, instance_name, load_annotations, read_annotations  # noqa: E402
+from catgrasp_drake.data.dataset import INSTANCE_COUNTS, instance_name  # noqa: E402
 from catgrasp_drake.demo import default_model_path  # noqa: E402
 from catgrasp_drake.grasping.descriptor import motion_functional_point  # noqa: E402
 from catgrasp_drake.prediction import ESTIMATORS  # noqa: E402
@@ -39,10 +39,10 @@ def objects(category, family, data):
     names = [instance_name(category, i) for i in range(INSTANCE_COUNTS[category])]
     base = load_scenario(f"{category}_default")
     if family == "committed":
-        return [(n, with_instance(base, n, category=category), None) for n in names]
+        return [(n, with_instance(base, n, category=category)) for n in names]
     out = []
     for name, directory in stretched_objects(Path(data) / "stress", category, names, [family]):
-        out.append((name, with_instance(base, name, category=category, model_dir=directory), directory))
+        out.append((name, with_instance(base, name, category=category, model_dir=directory)))
     return out
 
 
@@ -59,10 +59,8 @@ def main(argv=None) -> int:
     print("family | method | views | error x / y / z mean (mm) | z sd | |error| median | z < -5 mm")
     for family in args.families:
         errs = {"latent": [], "paper": []}
-        for name, base, directory in objects(args.category, family, args.data):
-            ann = (load_annotations(args.category, name) if directory is None
-                   else read_annotations(Path(directory) / "annotations.json"))
-            c_O = np.asarray(ann["regions"][region]["center"], float)
+        for name, base in objects(args.category, family, args.data):
+            c_O = np.asarray(base.object.annotations()["regions"][region]["center"], float)
             for k in range(args.placements):
                 scenario, _, _ = trial_placement(base, name, k, args.seed, noise=True)
                 X_WO = scenario.X_WO()
