@@ -43,7 +43,8 @@ DEFAULT_PHYSICS = "default"
 #: Display orders (values not listed follow, sorted by name).
 SPLITS = ("test", "fresh", "ycb", "ais", "stress")
 SPLIT_TITLES = {"test": "held-out generated instances",
-                "fresh": "generated instances of a newly drawn data-set seed (the records' data_seed): never seen",
+                "fresh": "generated instances of newly drawn data-set seeds (each named <instance>@<data_seed>): "
+                         "never seen",
                 "ycb": "real scans (YCB)",
                 "ais": "real drills (AIS clouds; trigger pinned, session 21: the session-7 model's transfer)",
                 "stress": "the committed instances stretched to real proportions (a TUNING set, not a measure)",
@@ -63,9 +64,10 @@ POOLED = ("drill", "spray_bottle")
 MARKERS = ("summary", "full")
 #: Fields every record must have.
 REQUIRED_FIELDS = ("split", "category", "instance", "trial", "view", "method", "physics", "grasp", "functional")
-#: Fields that identify one trial of one method; ``seed`` (the benchmark's seed) is optional in a record.
-#: Two records with the same values are the same trial twice (e.g. a records file passed twice): refused.
-TRIAL_KEY = PAIR_KEY + ("method", "seed")
+#: Fields that identify one trial of one method; ``seed`` (the benchmark's seed) and ``data_seed`` (the fresh
+#: split's data-set seed) are optional in a record. Two records with the same values are the same trial twice
+#: (e.g. a records file passed twice): refused.
+TRIAL_KEY = PAIR_KEY + ("method", "seed", "data_seed")
 #: Pairing keys: methods on the same trials; physics settings on the same trials (same method).
 METHOD_PAIR_KEY = PAIR_KEY + ("seed",)
 PHYSICS_PAIR_KEY = ("split", "category", "instance", "trial", "view", "method", "seed")
@@ -102,16 +104,22 @@ def _validated(records: Iterable[dict], *, unique: bool = False) -> list[dict]:
                 trial = ", ".join(f"{f} {r.get(f)}" for f in TRIAL_KEY)
                 raise InputError(f"the records hold the same trial twice ({trial}); is a records file passed twice?")
             seen.add(k)
-    fresh_seeds = sorted({r.get("data_seed") for r in records if r["split"] == "fresh"}, key=str)
-    if len(fresh_seeds) > 1:  # their instances share names: one table would mix different objects
-        raise InputError(f"the records hold the split 'fresh' of several data-set seeds ({fresh_seeds}); "
-                         "report or merge one seed at a time")
     return records
 
 
-def _with_seed(records: Iterable[dict]) -> list[dict]:
-    """The records with a ``seed`` field (None where absent), for the pairing keys."""
-    return [r if "seed" in r else r | {"seed": None} for r in records]
+def _object_name(record: dict) -> str:
+    """The object a record's trial was run on: its instance, and for the fresh split its data-set seed too
+    (``drill_00@20261205``): two seeds' instances share names but are different objects."""
+    if record["split"] == "fresh" and record.get("data_seed") is not None:
+        return f"{record['instance']}@{record['data_seed']}"
+    return record["instance"]
+
+
+def _tabled(records: Iterable[dict]) -> list[dict]:
+    """The records as the tables use them: ``instance`` names the object (:func:`_object_name`), so that
+    pairing keys and the bootstrap's resampled units never merge two seeds' objects, and a ``seed`` field
+    (None where absent) for the pairing keys."""
+    return [r | {"instance": _object_name(r), "seed": r.get("seed")} for r in records]
 
 
 def write_benchmark_records(path: str | Path, records: Iterable[dict]) -> None:
@@ -504,7 +512,7 @@ def benchmark_tables(records: Iterable[dict]) -> str:
 
     InputError if a record lacks a field of :data:`REQUIRED_FIELDS` or two records are the same trial.
     """
-    records = _with_seed(_validated(records, unique=True))
+    records = _tabled(_validated(records, unique=True))
     if not records:
         return "No benchmark records."
     default = [r for r in records if r["physics"] == DEFAULT_PHYSICS]
@@ -525,7 +533,7 @@ def summary_table(records: Iterable[dict], *, tuning: bool = False) -> str:
     """The README's compact table (the ``summary`` marker): per split and category, single view, default physics,
     the latent method's grasp and functional rates and the baseline with the highest functional rate; held-out
     splits only (not :data:`TUNING_SPLITS`) unless ``tuning`` (the CLI's summary of a tuning run)."""
-    records = [r for r in _validated(records, unique=True)
+    records = [r for r in _tabled(_validated(records, unique=True))
                if r["physics"] == DEFAULT_PHYSICS and r["view"] == "single"
                and (tuning or r["split"] not in TUNING_SPLITS)]
     rows = []
@@ -546,7 +554,8 @@ def summary_table(records: Iterable[dict], *, tuning: bool = False) -> str:
                 base = ["—", "—"]
             else:
                 b = _select(rs, method=best)
-                base = [_label(best), _rate(_field(b, "instance"), _outcome(b, "functional"))]
+                trials = "" if len(b) == len(latent) else f" ({len(b)} trials)"  # e.g. run on one fresh seed only
+                base = [_label(best) + trials, _rate(_field(b, "instance"), _outcome(b, "functional"))]
             inst = _field(latent, "instance")
             rows.append([f"`{split}`", _category(category), str(len(latent)),
                          _rate(inst, _outcome(latent, "grasp")), _rate(inst, _outcome(latent, "functional"))] + base)

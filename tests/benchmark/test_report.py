@@ -343,3 +343,29 @@ def test_a_tuning_split_is_in_the_full_tables_but_never_in_the_summary():
     full = benchmark_tables(rs)
     assert "Split `stress`: the committed instances stretched to real proportions (a TUNING set" in full
     assert "1/4 (25 %)" in full
+
+
+def test_fresh_seeds_pool_as_distinct_objects_and_pair_within_their_seed():
+    """Two fresh data-set seeds both name their instances ``mug_00``..: the tables count them as different objects
+    (``mug_00@31`` is not ``mug_00@32``), pair methods only within a seed, and a records merge keeps both."""
+    def rec(data_seed, instance, trial, method, ok):
+        return {"split": "fresh", "data_seed": data_seed, "category": "mug", "instance": instance, "trial": trial,
+                "view": "single", "method": method, "physics": "default", "seed": 0, "grasp": ok, "functional": ok,
+                "reason": None, "timings": {"total": 2.0}}
+
+    # seed 31: latent grasps every mug, rigid none; seed 32: rigid only ran on mug_00..01, latent fails there
+    rs = [rec(31, f"mug_{i:02d}", t, m, m == "latent") for i in range(3) for t in range(2) for m in ("latent", "rigid")]
+    rs += [rec(32, f"mug_{i:02d}", t, "latent", False) for i in range(3) for t in range(2)]
+    rs += [rec(32, f"mug_{i:02d}", t, "rigid", True) for i in range(2) for t in range(2)]
+    text = benchmark_tables(rs)
+    assert "| latent | 12 | 6/12 (50 %) [" in text and "| 6 | 2.0 s |" in text  # 6 objects, not 3
+    assert "| rigid | 10 | 4/10 (40 %) [" in text
+    row = [line for line in text.splitlines() if line.startswith("| mug | single | rigid |")][0]
+    # 10 pairs (seed 31: 6, seed 32: 4): latent 6/10, rigid 4/10; a cross-seed pairing would give other counts
+    assert "| 10 | 6/10 (60 %) | 4/10 (40 %) | +20 pp [" in row
+    summary = summary_table(rs)
+    assert "| `fresh` | mug | 12 | 6/12 (50 %) [" in summary and "| rigid (10 trials) | 4/10 (40 %)" in summary
+    merged = merged_records([r for r in rs if r["data_seed"] == 31], [r for r in rs if r["data_seed"] == 32])
+    assert len(merged) == len(rs)
+    with pytest.raises(InputError, match="same trial twice"):
+        benchmark_tables(rs + rs[-1:])
