@@ -17,7 +17,7 @@ import numpy as np
 import trimesh
 
 from catgrasp_drake.core.validation import as_points, count, non_negative, positive, real_number, vector3
-from catgrasp_drake.core.visibility import camera_on_sphere_position
+from catgrasp_drake.core.visibility import camera_on_sphere_position, look_at_matrix
 from catgrasp_drake.data.open3d_import import import_open3d
 from catgrasp_drake.errors import InputError
 
@@ -53,17 +53,9 @@ class PinholeCamera:
 
     def rays(self) -> tuple[np.ndarray, np.ndarray]:
         """(origins, unit directions) of one ray per pixel, each ``(H*W, 3)``."""
-        eye, target, up = (np.asarray(v, float) for v in (self.eye, self.target, self.up))
-        forward = target - eye
-        norm = np.linalg.norm(forward)
-        if norm < 1e-9:
-            raise InputError("camera: eye and target coincide")
-        forward /= norm
-        right = np.cross(forward, up)
-        if np.linalg.norm(right) < 1e-9:
-            right = np.cross(forward, [1.0, 0.0, 0.0])
-        right /= np.linalg.norm(right)
-        down = np.cross(forward, right)
+        eye = np.asarray(self.eye, float)
+        X_MC = look_at_matrix(eye, self.target, self.up)  # camera axes: x right, y down, z forward
+        right, down, forward = X_MC[:3, 0], X_MC[:3, 1], X_MC[:3, 2]
         f = 0.5 * self.height / np.tan(np.radians(self.fov_y_deg) / 2)
         u = np.arange(self.width) + 0.5 - self.width / 2
         v = np.arange(self.height) + 0.5 - self.height / 2
