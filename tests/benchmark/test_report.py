@@ -358,6 +358,7 @@ def test_fresh_seeds_pool_as_distinct_objects_and_pair_within_their_seed():
     rs += [rec(32, f"mug_{i:02d}", t, "latent", False) for i in range(3) for t in range(2)]
     rs += [rec(32, f"mug_{i:02d}", t, "rigid", True) for i in range(2) for t in range(2)]
     text = benchmark_tables(rs)
+    assert "never seen (data-set seeds 31, 32)" in text
     assert "| latent | 12 | 6/12 (50 %) [" in text and "| 6 | 2.0 s |" in text  # 6 objects, not 3
     assert "| rigid | 10 | 4/10 (40 %) [" in text
     row = [line for line in text.splitlines() if line.startswith("| mug | single | rigid |")][0]
