@@ -120,6 +120,14 @@ def _cmd_clouds(args) -> int:
     return 0
 
 
+def _time_left(seconds: float) -> str:
+    """``~40 s``, ``~12 min`` or ``~1 h 30 min``: a progress bar's estimate of the time left."""
+    if seconds < 60:
+        return f"~{max(int(round(seconds)), 1)} s"
+    minutes = int(round(seconds / 60))
+    return f"~{minutes} min" if minutes < 60 else f"~{minutes // 60} h {minutes % 60} min"
+
+
 class _Progress:
     """A one-line progress bar on stderr (CLI only; the library never prints)."""
 
@@ -135,8 +143,9 @@ class _Progress:
         width = 30
         filled = int(width * done / max(total, 1))
         rate = done / max(time.perf_counter() - self.t0, 1e-9)
+        left = f", {_time_left((total - done) / rate)} left" if 0 < done < total else ""
         sys.stderr.write(f"\r  {stage:<7s} [{'#' * filled}{'.' * (width - filled)}] {done}/{total} "
-                         f"({rate:.2f}/s)")
+                         f"({rate:.2f}/s{left})   ")
         if done == total:
             sys.stderr.write("\n")
             self.stage = None

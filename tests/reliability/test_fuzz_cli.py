@@ -225,3 +225,21 @@ def test_cli_rejects_bad_arguments(tmp_path_factory, data):
         RECORDS.append({"entry": "cli.main", "label": label, "outcome": status,
                         "seconds": time.perf_counter() - t0, "message": message[:300]})
         shutil.rmtree(tmp, ignore_errors=True)
+
+
+def test_the_progress_bar_says_how_long_is_left(monkeypatch, capsys):
+    """Half the trials done in 60 s: the bar says ~1 min left; done: no estimate, a newline."""
+    from catgrasp_drake import cli
+
+    clock = iter([0.0, 0.0, 60.0, 7260.0, 7300.0])  # the bar made, its stage started, then one reading per call
+    monkeypatch.setattr(cli.time, "perf_counter", lambda: next(clock))
+    bar = cli._Progress()
+    bar("trials", 5, 10)
+    assert "5/10 (0.08/s, ~1 min left)" in capsys.readouterr().err
+    bar("trials", 6, 1000)  # 6 in 7260 s: 994 more take 1.2e6 s
+    assert "(0.00/s, ~334 h 6 min left)" in capsys.readouterr().err
+    bar("trials", 1000, 1000)
+    err = capsys.readouterr().err
+    assert "1000/1000" in err and "left" not in err and err.endswith("\n")
+    assert [cli._time_left(s) for s in (0.2, 59.0, 90.0, 3599.0, 3600.0, 5400.0)] == \
+        ["~1 s", "~59 s", "~2 min", "~1 h 0 min", "~1 h 0 min", "~1 h 30 min"]
