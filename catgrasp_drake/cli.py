@@ -420,11 +420,14 @@ def _cmd_benchmark(args) -> int:
 
 
 def _cmd_report(args) -> int:
-    from catgrasp_drake.benchmark.report import check_markdown, load_benchmark_records, report
+    from catgrasp_drake.benchmark.report import benchmark_tables, check_markdown, load_benchmark_records, report
 
     paths = args.records or sorted(str(p) for p in Path("benchmarks/results").glob("*.jsonl"))
     if not paths:
         raise InputError("no records: pass --records FILE... or run 'catgrasp benchmark' first")
+    if args.print:
+        print(benchmark_tables(load_benchmark_records(paths)), end="")
+        return 0
     if args.check:
         records = load_benchmark_records(paths)
         stale = {md: check_markdown(md, records) for md in args.markdown}
@@ -813,6 +816,9 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--records", nargs="+", help="records files (default: benchmarks/results/*.jsonl)")
     r.add_argument("--markdown", nargs="+", default=["README.md", "docs/benchmark.md"])
     r.add_argument("--check", action="store_true", help="only check that the tables match the records")
+    r.add_argument("--print", action="store_true",
+                   help="print every table of the records to stdout instead (e.g. one experiment's file; no file "
+                        "is written)")
     r.set_defaults(func=_cmd_report)
 
     d = sub.add_parser("demo", help="the main job on the embedded default data")
