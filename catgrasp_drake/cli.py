@@ -815,8 +815,9 @@ def build_parser() -> argparse.ArgumentParser:
     r = sub.add_parser("report", help="rebuild the README's and docs/benchmark.md's benchmark tables from records")
     r.add_argument("--records", nargs="+", help="records files (default: benchmarks/results/*.jsonl)")
     r.add_argument("--markdown", nargs="+", default=["README.md", "docs/benchmark.md"])
-    r.add_argument("--check", action="store_true", help="only check that the tables match the records")
-    r.add_argument("--print", action="store_true",
+    only = r.add_mutually_exclusive_group()
+    only.add_argument("--check", action="store_true", help="only check that the tables match the records")
+    only.add_argument("--print", action="store_true",
                    help="print every table of the records to stdout instead (e.g. one experiment's file; no file "
                         "is written)")
     r.set_defaults(func=_cmd_report)

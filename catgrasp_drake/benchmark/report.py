@@ -322,9 +322,10 @@ def _difference_rows(records: Sequence[dict]) -> list[list[str]]:
 
 
 def _split_section(split: str, records: Sequence[dict]) -> list[str]:
+    title = _split_title(split)
     seeds = sorted({r["data_seed"] for r in records if r.get("data_seed") is not None})
-    title = _split_title(split) + (f" (data-set seed{'s' if len(seeds) > 1 else ''} "
-                                   f"{', '.join(str(x) for x in seeds)})" if seeds else "")
+    if seeds:
+        title += f" (data-set seed{'s' if len(seeds) > 1 else ''} {', '.join(map(str, seeds))})"
     out = [f"### {title}", ""]
     categories = _ordered(_field(records, "category"), CATEGORIES)
     views = _ordered(_field(records, "view"), VIEWS)

@@ -107,6 +107,7 @@ def hand_fit(scenario: Scenario, motion_O: GraspMotion, params: PlanParams = Pla
     r = clearance_shift(np.vstack(points), field, tolerance, params.max_object_shift)
     return HandFit(depths, np.asarray(r.shift, float), bool(r.ok), float(tolerance), float(params.max_object_shift))
 
+
 #: The hand's links by finger, as :func:`closing_contacts` names them (the palm: the base and the palm's flex link).
 FINGER_LINKS = {
     "thumb": ("svh_thumb_base_link", "svh_thumb_proximal_link", "svh_thumb_middle_link", "svh_thumb_distal_link"),

@@ -372,16 +372,15 @@ def test_fresh_seeds_pool_as_distinct_objects_and_pair_within_their_seed():
         benchmark_tables(rs + rs[-1:])
 
 
-def test_report_print_shows_one_files_tables_and_writes_nothing(tmp_path, records):
+def test_report_print_shows_one_files_tables_and_writes_nothing(tmp_path, records, capsys):
     """``catgrasp report --records FILE --print``: every table of those records on stdout, no Markdown touched."""
+    from catgrasp_drake.cli import main
+
     path = tmp_path / "experiment.jsonl"
     write_benchmark_records(path, records)
     readme = tmp_path / "README.md"
     readme.write_text("# Project\n\n<!-- benchmark:summary -->\n<!-- /benchmark:summary -->\n")
     before = readme.read_text()
-    result = subprocess.run([sys.executable, "-c", "import sys; from catgrasp_drake.cli import main; "
-                             "sys.exit(main(sys.argv[1:]))", "report", "--records", str(path), "--print",
-                             "--markdown", str(readme)], capture_output=True, text=True)
-    assert result.returncode == 0, result.stderr
-    assert result.stdout == benchmark_tables(records)
+    assert main(["report", "--records", str(path), "--print", "--markdown", str(readme)]) == 0
+    assert capsys.readouterr().out == benchmark_tables(records)
     assert readme.read_text() == before
