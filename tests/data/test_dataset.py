@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 
 import numpy as np
 import pytest
@@ -18,6 +19,7 @@ from catgrasp_drake.data.dataset import (
     load_annotations,
     load_mesh,
     models_dir,
+    obj_bytes,
     objects_dir,
     tree_digest,
 )
@@ -172,6 +174,19 @@ def test_unknown_category_and_instance_are_clear_errors():
         list_instances("teapot")
     with pytest.raises(InputError, match="unknown instance 'drill_99'"):
         load_annotations("drill", "drill_99")
+
+
+def test_obj_text_writes_zero_unsigned_and_keeps_small_negatives():
+    # a coordinate a hair below zero prints "-0.000000" and which side of zero it lands on differs between
+    # numpy releases; the writer drops that sign, and only that sign
+    mesh = trimesh.Trimesh(vertices=[[-1e-9, 0.0, 0.0], [1.0, -1e-6, 0.0], [0.0, 1.0, -1e-12], [0.0, 0.0, 1.0]],
+                           faces=[[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]], process=False)
+    text = obj_bytes(mesh).decode()
+    lines = text.splitlines()
+    assert lines[1] == "v 0.000000 0.000000 0.000000"
+    assert lines[2] == "v 1.000000 -0.000001 0.000000"
+    assert lines[3] == "v 0.000000 1.000000 0.000000"
+    assert not re.search(r"(?<![\d.])-0\.0+(?![\d])", text)  # nor in the normals
 
 
 def test_dataset_regenerates_byte_for_byte(tmp_path):
