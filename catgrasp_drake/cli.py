@@ -388,12 +388,12 @@ def _cmd_benchmark(args) -> int:
     if args.model:  # a user's model (e.g. a category folder's) for their own objects, never the committed tables
         from catgrasp_drake.category_model import CategoryModel
 
-        if split not in ("objects", "stress"):
-            raise InputError(f"--model: only with --objects or --split stress (the split {split!r} is measured with "
-                             "the committed models)")
+        if split not in ("objects", "stress", "val"):
+            raise InputError(f"--model: only with --objects or a tuning split, stress or val (the split {split!r} "
+                             "is measured with the committed models)")
         model_paths = {CategoryModel.load(args.model).category: str(args.model)}
-        if not args.out and split == "stress":
-            raise InputError("--model with --split stress: give --out (benchmarks/results/ holds the committed "
+        if not args.out and split in ("stress", "val"):
+            raise InputError(f"--model with --split {split}: give --out (benchmarks/results/ holds the committed "
                              "models' records)")
     out = Path(args.out) if args.out else _default_records_path(config)
     kept = load_benchmark_records(out) if args.merge and out.exists() else []  # read (and checked) before the run
@@ -766,15 +766,17 @@ def build_parser() -> argparse.ArgumentParser:
 
     b = sub.add_parser("benchmark", help="the project's measure: held-out objects, every method through the "
                        "transfer diagram, varied placements, the strict judge, intervals")
-    b.add_argument("--split", choices=("test", "fresh", "ycb", "ais", "stress", "smoke", "objects"), default=None,
+    b.add_argument("--split", choices=("test", "fresh", "val", "ycb", "ais", "stress", "smoke", "objects"),
+                   default=None,
                    help="test (default): generated from the fixed test seed; fresh: generated from --data-seed "
-                        "(instances nobody has seen); ycb: real scans (extra .[ycb]); "
+                        "(instances nobody has seen); val: generated from the fixed validation seed (novel "
+                        "draws, a TUNING set); ycb: real scans (extra .[ycb]); "
                         "ais: the 11 real AIS drill clouds (../shared/datasets/ais_drills); stress: the "
                         "committed instances stretched to real proportions (a TUNING set); "
                         "smoke: 2 drills; objects: the --objects")
     b.add_argument("--model", default=None, metavar="FILE",
                    help="with --objects: the model of their category to use (e.g. a category folder's, "
-                        "out/categories/<name>/<name>.npz; default: the committed one); with --split stress: a "
+                        "out/categories/<name>/<name>.npz; default: the committed one); with --split stress or val: a "
                         "model to tune (needs --out)")
     b.add_argument("--objects", nargs="+", metavar="DIR", default=None,
                    help="imported objects' directories (catgrasp import-object): the split 'objects'; records go "

@@ -21,6 +21,11 @@ are the train/tune split):
            committed data set's): instances nobody has seen, not even the test split's readers, written on
            demand into ``<data_dir>/fresh_seed<data_seed>/<category>``. Its records carry ``data_seed``;
            one records file holds one seed.
+``val``    generated instances from the fixed :data:`VAL_SEED` (drawn in session 37 with ``secrets``, before any
+           of its objects existed), written on demand into ``<data_dir>/val_seed<VAL_SEED>``: a TUNING set
+           of novel draws. The committed instances are the models' training instances and the stress split
+           stretches them, so neither shows what a fit does on a shape the shape space never saw; this split
+           does, and may be tuned on (its figures are not results). The first ``instances_per_category``.
 ``smoke``  the first two test drills, one placement, latent and rigid: the CI run.
 ``objects`` the user's imported objects (``catgrasp import-object``), one directory each in
            ``BenchmarkConfig.objects``; their records go to ``out/benchmark/``, not the committed tables.
@@ -61,7 +66,9 @@ from catgrasp_drake.transfer import VIEWS
 
 #: The test split's data-set seed. Fixed; nothing (grasps, kernels, thresholds) is chosen on it.
 TEST_SEED = 7919
-SPLITS = ("test", "fresh", "ycb", "ais", "stress", "smoke", "objects")
+#: The validation (tuning) split's data-set seed: novel generator draws that may be tuned on (``val``).
+VAL_SEED = 902870906
+SPLITS = ("test", "fresh", "val", "ycb", "ais", "stress", "smoke", "objects")
 #: The YCB scans of each category that have the category's functional part.
 YCB_BY_CATEGORY = {"drill": ("ycb_035",), "spray_bottle": ("ycb_022",), "mug": ("ycb_025",)}
 BENCHMARK_METHODS = ("latent", "latent_map", "paper", "nearest", "rigid", "cpd")
@@ -127,8 +134,9 @@ class BenchmarkConfig:
             if isinstance(self.data_seed, bool) or not isinstance(self.data_seed, int) or self.data_seed < 0:
                 raise InputError("split fresh: give its data-set seed (--data-seed, a non-negative integer), "
                                  f"got {self.data_seed!r}")
-            if self.data_seed in (TEST_SEED, DATASET_SEED):
-                whose = "the test split" if self.data_seed == TEST_SEED else "the committed data set"
+            if self.data_seed in (TEST_SEED, DATASET_SEED, VAL_SEED):
+                whose = {TEST_SEED: "the test split", DATASET_SEED: "the committed data set",
+                         VAL_SEED: "the validation (tuning) split"}[self.data_seed]
                 raise InputError(f"data_seed: {self.data_seed} is {whose}'s seed; a fresh split needs another")
         elif self.data_seed is not None:
             raise InputError(f"data_seed: only for the split 'fresh' (the split {self.split!r} has its own objects)")
@@ -154,20 +162,21 @@ class BenchmarkObject:
     model_dir: str
 
 
-def test_split_dir(data_dir: str | Path) -> Path:
-    return Path(data_dir) / f"test_seed{TEST_SEED}"
+def test_split_dir(data_dir: str | Path, seed: int = TEST_SEED) -> Path:
+    return Path(data_dir) / (f"test_seed{seed}" if seed == TEST_SEED else f"val_seed{seed}")
 
 
-def ensure_test_split(data_dir: str | Path) -> Path:
-    """Generate the test split (all categories, :data:`TEST_SEED`) into ``data_dir`` unless it is there,
-    made by the current generators (a changed generator regenerates it: its marker names their fingerprint)."""
+def ensure_test_split(data_dir: str | Path, seed: int = TEST_SEED) -> Path:
+    """Generate the test split (all categories, :data:`TEST_SEED`; or the validation split, ``seed`` =
+    :data:`VAL_SEED`) into ``data_dir`` unless it is there, made by the current generators (a changed
+    generator regenerates it: its marker names their fingerprint)."""
     from catgrasp_drake.data.dataset import INSTANCE_COUNTS, generate_dataset
 
-    root = test_split_dir(data_dir)
+    root = test_split_dir(data_dir, seed)
     marker = root / "COMPLETE"
-    stamp = f"seed {TEST_SEED}, {sum(INSTANCE_COUNTS.values())} instances, generators {_generator_version()}"
+    stamp = f"seed {seed}, {sum(INSTANCE_COUNTS.values())} instances, generators {_generator_version()}"
     if not marker.is_file() or marker.read_text().strip() != stamp:
-        generate_dataset(root, seed=TEST_SEED)
+        generate_dataset(root, seed=seed)
         atomic_write_text(marker, stamp + "\n")
     return root
 
@@ -206,10 +215,10 @@ def ensure_fresh_split(data_dir: str | Path, data_seed: int, category: str) -> P
 def split_objects(config: BenchmarkConfig) -> list[BenchmarkObject]:
     """The objects of ``config.split`` for its categories (generated or prepared on demand)."""
     out = []
-    if config.split in ("test", "smoke"):
+    if config.split in ("test", "smoke", "val"):
         from catgrasp_drake.data.dataset import INSTANCE_COUNTS, instance_name
 
-        root = ensure_test_split(config.data_dir)
+        root = ensure_test_split(config.data_dir, VAL_SEED if config.split == "val" else TEST_SEED)
         categories = ("drill",) if config.split == "smoke" else config.categories
         for category in categories:
             n = 2 if config.split == "smoke" else min(config.instances_per_category, INSTANCE_COUNTS[category])

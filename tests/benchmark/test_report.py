@@ -337,12 +337,15 @@ def test_a_tuning_split_is_in_the_full_tables_but_never_in_the_summary():
 
     rs = [rec("test", f"drill_t{i:02d}", 0, True) for i in range(4)]
     rs += [rec("stress", f"drill_{i:02d}_deep", 0, i < 1) for i in range(4)]
+    rs += [rec("val", f"drill_{i:02d}", 0, i < 2) for i in range(4)]
     summary = summary_table(rs)
-    assert "`test`" in summary and "`stress`" not in summary
+    assert "`test`" in summary and "`stress`" not in summary and "`val`" not in summary
     assert "| `stress` | drill | 4 |" in summary_table(rs, tuning=True)  # the CLI's summary of a tuning run
+    assert "| `val` | drill | 4 |" in summary_table(rs, tuning=True)
     full = benchmark_tables(rs)
     assert "Split `stress`: the committed instances stretched to real proportions (a TUNING set" in full
-    assert "1/4 (25 %)" in full
+    assert "Split `val`: generated instances of the validation seed: novel draws (a TUNING set" in full
+    assert "1/4 (25 %)" in full and "2/4 (50 %)" in full
 
 
 def test_fresh_seeds_pool_as_distinct_objects_and_pair_within_their_seed():

@@ -260,6 +260,24 @@ def test_the_fresh_split_draws_instances_nobody_has_seen_from_its_own_seed(tmp_p
     assert [r["data_seed"] for r in two_seeds] == [31, 32]
 
 
+def test_the_validation_split_is_its_own_seeds_novel_draws_and_no_fresh_seed_may_reuse_it(tmp_path):
+    """``--split val``: the categories' instances generated from :data:`VAL_SEED` into ``val_seed<VAL_SEED>``,
+    other objects than the test split's under the same names; a fresh split may not take its seed."""
+    from catgrasp_drake.benchmark.runner import VAL_SEED, ensure_test_split
+    from catgrasp_drake.data.dataset import read_annotations
+
+    cfg = BenchmarkConfig(split="val", categories=("mug",), methods=("latent",), instances_per_category=2,
+                          placements=1, data_dir=str(tmp_path))
+    specs = trial_specs(cfg)
+    assert {(s["split"], s["instance"]) for s in specs} == {("val", "mug_00"), ("val", "mug_01")}
+    assert all(f"val_seed{VAL_SEED}" in s["model_dir"] for s in specs) and "data_seed" not in specs[0]
+    val = read_annotations(tmp_path / f"val_seed{VAL_SEED}" / "mug" / "mug_00" / "annotations.json")
+    test = read_annotations(ensure_test_split(tmp_path) / "mug" / "mug_00" / "annotations.json")
+    assert val["seed"][0] == VAL_SEED and test["seed"][0] != VAL_SEED  # [data-set seed, category, index]
+    with pytest.raises(InputError, match="validation"):
+        BenchmarkConfig(split="fresh", data_seed=VAL_SEED)
+
+
 def test_benchmark_merge_rewrites_only_the_rerun_trials(tmp_path, monkeypatch):
     """``catgrasp benchmark --merge`` (a category re-run after retraining it) keeps the file's other trials;
     without it the file holds this run's trials only. The trials themselves are stubbed: this is the CLI's
