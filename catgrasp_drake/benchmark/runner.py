@@ -526,10 +526,9 @@ def trial_specs(config: BenchmarkConfig, model_paths: dict[str, str] | None = No
             path = Path((model_paths or {}).get(obj.category) or default_model_path(obj.category))
             models[obj.category] = (str(path), file_sha256(path))
         path, sha = models[obj.category]
-        # an imported object may be re-imported into the same directory (and a YCB scan prepared again by a
-        # changed import): its files are part of the cache key
-        own = ({"object_sha256": object_files_sha256(obj.model_dir, obj.instance)}
-               if obj.split in ("objects", "ycb", "ais", "stress") else {})
+        # an imported object may be re-imported into the same directory, a YCB scan prepared again by a changed
+        # import and a generated split made again by changed generators: its files are part of the cache key
+        own = {"object_sha256": object_files_sha256(obj.model_dir, obj.instance)}
         if obj.split == "fresh":
             own["data_seed"] = int(config.data_seed)
         for view in config.views:
