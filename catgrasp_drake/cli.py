@@ -451,6 +451,7 @@ def _cmd_demo(args) -> int:
 def _cmd_import_object(args) -> int:
     from catgrasp_drake.data.dataset import CATEGORIES
     from catgrasp_drake.data.importer import LOW_CONFIDENCE, import_object, parse_transform
+    from catgrasp_drake.data.meshes import MIN_TIPPING_ANGLE_DEG
     from catgrasp_drake.errors import ModelFileError
 
     if args.category not in CATEGORIES:
@@ -495,8 +496,10 @@ def _cmd_import_object(args) -> int:
         print("  region     none")
     print(f"  mass       {imported.mass_kg:.3f} kg ({rec['mass_source']}); collision mesh: {rec['collision_mesh']}")
     margin_mm = 1000 * rec["support_margin_m"]
+    tips = (f"; it tips at {rec['tipping_angle_deg']:.1f} deg (below {MIN_TIPPING_ANGLE_DEG:.0f}: it falls over by "
+            "itself in simulation)") if "tipping_angle_deg" in rec and margin_mm > 0 else ""
     print(f"  stands     {'yes' if rec['stands'] else 'NO'}: its centre of mass is {abs(margin_mm):.0f} mm "
-          f"{'inside' if rec['stands'] else 'outside'} its base")
+          f"{'inside' if margin_mm > 0 else 'outside'} its base{tips}")
     try:
         from catgrasp_drake.planning.fit import hand_fit
         from catgrasp_drake.station.handwritten import handwritten_trial

@@ -64,11 +64,13 @@ from catgrasp_drake.data.categories import DENSITY_KG_M3, FUNCTIONAL_REGION, REG
 from catgrasp_drake.data.cloud_io import read_point_cloud
 from catgrasp_drake.data.dataset import CATEGORIES, load_annotations, read_annotations, write_model_files
 from catgrasp_drake.data.meshes import (
+    MIN_TIPPING_ANGLE_DEG,
     bridge_gaps,
     drop_debris,
     flatten_base,
     read_mesh,
     support_margin,
+    tipping_angle_deg,
     watertight_for_mass,
 )
 from catgrasp_drake.data.open3d_import import import_open3d
@@ -606,6 +608,7 @@ def import_mesh(mesh: trimesh.Trimesh, category: str, name: str, *, model: Categ
     solid.density = density
     written_mesh = solid if solid_method == "repaired" else canonical
     margin = support_margin(written_mesh, solid.center_mass)
+    tipping = tipping_angle_deg(written_mesh, solid.center_mass)
     record = {
         "source": source or {},
         "transform": alignment.record(),
@@ -616,9 +619,11 @@ def import_mesh(mesh: trimesh.Trimesh, category: str, name: str, *, model: Categ
         "region_source": region_source,
         "base_flattened_m": drop,
         "bridged_gaps": bridges,
-        # the centre of mass over the base (m; meshes.support_margin): negative, it falls over by itself
+        # the centre of mass over the base (m; meshes.support_margin): negative, it falls over by itself;
+        # the angle it tips at (meshes.tipping_angle_deg): below MIN_TIPPING_ANGLE_DEG it falls in simulation
         "support_margin_m": round(margin, 4),
-        "stands": bool(margin > 0.0),
+        "tipping_angle_deg": round(tipping, 2),
+        "stands": bool(tipping >= MIN_TIPPING_ANGLE_DEG),
     }
     directory = Path(out) if out is not None else default_out_dir(category, name)
     fields = {"inertia_from": solid_method, "density_kg_m3": round(density, 3), "functional": bool(regions),

@@ -7,14 +7,9 @@ import pytest
 import trimesh
 
 from catgrasp_drake.benchmark.runner import VAL_SEED
-from catgrasp_drake.data.categories import (
-    MIN_TIPPING_ANGLE_DEG,
-    build_drill,
-    drill_params,
-    generate_instance,
-    tipping_angle_deg,
-)
+from catgrasp_drake.data.categories import build_drill, drill_params, generate_instance
 from catgrasp_drake.data.dataset import instance_seed, write_instance
+from catgrasp_drake.data.meshes import MIN_TIPPING_ANGLE_DEG, tipping_angle_deg
 
 
 def test_tipping_angle_of_a_box_and_of_a_leaning_tower():
@@ -23,6 +18,8 @@ def test_tipping_angle_of_a_box_and_of_a_leaning_tower():
     tower = trimesh.creation.box([0.02, 0.02, 0.3])
     tower.apply_transform(trimesh.transformations.shear_matrix(np.radians(5.0), [0, 1, 0], [0, 0, 0], [0, 0, 1]))
     assert tipping_angle_deg(tower) < 0.0  # its top overhangs the base: it falls
+    assert tipping_angle_deg(box, [0.0, 0.0, 0.0]) == pytest.approx(np.degrees(np.arctan(0.5)), abs=1e-6)
+    assert tipping_angle_deg(box, [0.04, 0.0, 0.0]) == pytest.approx(np.degrees(np.arctan(0.1)), abs=1e-6)
 
 
 def _first_draw_of_val_drill_09():
@@ -36,6 +33,17 @@ def test_a_draw_that_would_not_stand_is_drawn_again():
     assert kept.params != first.params and tipping_angle_deg(kept.mesh) >= MIN_TIPPING_ANGLE_DEG
     angles = [tipping_angle_deg(generate_instance("drill", np.random.default_rng([5, 0, i])).mesh) for i in range(40)]
     assert min(angles) >= MIN_TIPPING_ANGLE_DEG
+
+
+def test_an_import_of_the_rejected_draw_is_said_not_to_stand(tmp_path):
+    from catgrasp_drake.data.importer import import_mesh
+
+    first = _first_draw_of_val_drill_09()
+    imported = import_mesh(first.mesh, "drill", "d", transform="0 0 0 0 0 0", regions=first.regions, mass_kg=1.0,
+                           base_flatten_m=0.0, out=tmp_path / "d")
+    rec = imported.record
+    assert rec["support_margin_m"] > 0.0 and rec["tipping_angle_deg"] == pytest.approx(2.5, abs=0.1)
+    assert not rec["stands"]
 
 
 def _tilt_after(name, directory, seconds):
