@@ -11,6 +11,8 @@ from catgrasp_drake.data.categories import build_drill, drill_params, generate_i
 from catgrasp_drake.data.dataset import instance_seed, write_instance
 from catgrasp_drake.data.meshes import MIN_TIPPING_ANGLE_DEG, tipping_angle_deg
 
+from .standing import tilt_after
+
 
 def test_tipping_angle_of_a_box_and_of_a_leaning_tower():
     box = trimesh.creation.box([0.1, 0.1, 0.2])  # centre of mass 0.1 m above a base 0.05 m from its edge
@@ -46,27 +48,11 @@ def test_an_import_of_the_rejected_draw_is_said_not_to_stand(tmp_path):
     assert not rec["stands"]
 
 
-def _tilt_after(name, directory, seconds):
-    from pydrake.systems.analysis import Simulator
-
-    from catgrasp_drake.station.scenario import load_scenario, with_instance
-    from catgrasp_drake.trial import trial_diagram
-
-    scenario = with_instance(load_scenario("drill_default"), name, category="drill",
-                             model_dir=None if directory is None else str(directory))
-    td = trial_diagram(scenario)
-    context = td.diagram.CreateDefaultContext()
-    Simulator(td.diagram, context).AdvanceTo(seconds)
-    h = td.station
-    X = h.plant.EvalBodyPoseInWorld(h.plant.GetMyContextFromRoot(context), h.object_body).GetAsMatrix4()
-    return float(np.degrees(np.arccos(np.clip(X[2, 2], -1.0, 1.0))))
-
-
 @pytest.mark.slow
 def test_the_rejected_draw_falls_by_itself_and_the_least_stable_committed_drill_stands(tmp_path):
     """Left alone on the table (the robot at home, nothing touching it): the 2.5 deg draw is over within 1.5 s;
     committed drill_11 (4.6 deg, the least stable instance the models were trained on) leans < 2 deg."""
     seed = instance_seed("drill", 9, VAL_SEED)
     write_instance(_first_draw_of_val_drill_09(), "drill_09", tmp_path / "drill_09", seed)
-    assert _tilt_after("drill_09", tmp_path / "drill_09", 1.5) > 45.0
-    assert _tilt_after("drill_11", None, 1.5) < 2.0
+    assert tilt_after("drill", "drill_09", tmp_path / "drill_09", 1.5) > 45.0
+    assert tilt_after("drill", "drill_11", None, 1.5) < 2.0

@@ -9,6 +9,8 @@ import trimesh
 from catgrasp_drake.data.importer import import_mesh
 from catgrasp_drake.data.meshes import flatten_base
 
+from .standing import tilt_after
+
 
 def _domed_bottle() -> trimesh.Trimesh:
     """A 26 cm bottle, 8 cm wide, whose underside is a dome like a scan's reconstructed bottom (15 mm sag:
@@ -34,23 +36,6 @@ def test_flatten_base_cuts_a_flat_face_at_the_old_lowest_height():
     assert same is m and not done
 
 
-def _tilt_after(directory, name, seconds=2.5) -> float:
-    from pydrake.systems.analysis import Simulator
-
-    from catgrasp_drake.station.scenario import load_scenario, with_instance
-    from catgrasp_drake.trial import trial_diagram
-
-    scenario = with_instance(load_scenario("spray_bottle_default"), name, category="spray_bottle",
-                             model_dir=str(directory))
-    td = trial_diagram(scenario)
-    context = td.diagram.CreateDefaultContext()
-    simulator = Simulator(td.diagram, context)
-    simulator.AdvanceTo(seconds)
-    h = td.station
-    X = h.plant.EvalBodyPoseInWorld(h.plant.GetMyContextFromRoot(context), h.object_body).GetAsMatrix4()
-    return float(np.degrees(np.arccos(np.clip(X[2, 2], -1.0, 1.0))))
-
-
 def test_a_domed_scan_falls_over_by_itself_and_stands_once_imported_with_a_flat_base(tmp_path):
     m = _domed_bottle()
     m.apply_translation([0.0, 0.0, -m.bounds[0][2]])
@@ -61,8 +46,8 @@ def test_a_domed_scan_falls_over_by_itself_and_stands_once_imported_with_a_flat_
     flat = import_mesh(m, "spray_bottle", "flat", out=tmp_path / "flat", **kw)
     assert domed.record["base_flattened_m"] == 0.0 and flat.record["base_flattened_m"] == 0.003
     assert flat.regions["trigger"]["center"][2] == pytest.approx(0.23 - 0.003, abs=5e-4)  # moved down with the cut
-    assert _tilt_after(tmp_path / "domed", "domed") > 30.0  # rocks on its dome and falls
-    assert _tilt_after(tmp_path / "flat", "flat") < 2.0
+    assert tilt_after("spray_bottle", "domed", tmp_path / "domed", 2.5) > 30.0  # rocks on its dome and falls
+    assert tilt_after("spray_bottle", "flat", tmp_path / "flat", 2.5) < 2.0
 
 
 def test_a_scan_in_two_stacked_pieces_is_bridged_into_one_solid():

@@ -38,11 +38,11 @@ from catgrasp_drake.transfer import observe  # noqa: E402
 HERE = Path(__file__).resolve().parent
 
 
-def view_figures(model, est, X_WO, mesh_O, c_O):
-    """The figures of one fit (module docstring) against the true object: mesh_O vertices (V, 3), trigger c_O."""
+def view_figures(model, est, X_WO, surface_O, c_O):
+    """The figures of one fit (module docstring) against the true object: points sampled on its surface
+    ``surface_O`` (V, 3) and its trigger centre ``c_O``, both in O (m)."""
     R, t = X_WO[:3, :3], X_WO[:3, 3]
     fit_O = (est.completed_W - t) @ R
-    surface_O = mesh_O
     ext_true = surface_O.max(0) - surface_O.min(0)
     ext_fit = fit_O.max(0) - fit_O.min(0)
     d, _ = cKDTree(fit_O).query(surface_O)
@@ -68,7 +68,7 @@ def main(argv=None) -> int:
     for obj in split_objects(BenchmarkConfig(split="val", categories=("drill",), data_dir=args.data)):
         scenario0 = with_instance(base, obj.instance, category="drill", model_dir=obj.model_dir)
         mesh = trimesh.load(Path(obj.model_dir) / f"{obj.instance}.obj", force="mesh")
-        mesh_O = np.asarray(mesh.sample(4000, seed=0))
+        surface_O = np.asarray(mesh.sample(4000, seed=0))
         c_O = np.asarray(scenario0.object.annotations()["regions"]["trigger"]["center"], float)
         for k in range(args.placements):
             scenario, _, _ = trial_placement(scenario0, obj.instance, k, 0, noise=True)
@@ -79,7 +79,7 @@ def main(argv=None) -> int:
                                         camera_W=camera_W if setup.visibility else None, yaw_candidates=8,
                                         **setup.inference_kwargs)
                 rows.append({"instance": obj.instance, "trial": k, "method": method}
-                            | view_figures(model, est, scenario.X_WO(), mesh_O, c_O))
+                            | view_figures(model, est, scenario.X_WO(), surface_O, c_O))
                 print(json.dumps(rows[-1]), flush=True)
     Path(args.out).write_text("".join(json.dumps(r) + "\n" for r in rows))
     for method in args.methods:
