@@ -35,7 +35,18 @@ from catgrasp_drake.planning.records import GraspPlan, PlanParams, hold_plan
 from catgrasp_drake.robot.models import HAND_BASE_LINK, INDEX_DISTAL_LINK, load_hand_postures
 from catgrasp_drake.runner import code_fingerprint
 from catgrasp_drake.station.builder import StationHandles, add_station, apply_context_knobs, posture_category
-from catgrasp_drake.station.judge import ContactRecord, JudgeSpec, Snapshot, Verdict, decided_failure, judge
+from catgrasp_drake.station.judge import (
+    FIRST_MOVE_SHIFT_M,
+    FIRST_MOVE_TILT_DEG,
+    ContactRecord,
+    FirstMove,
+    JudgeSpec,
+    Snapshot,
+    Verdict,
+    decided_failure,
+    judge,
+    tilt_deg,
+)
 from catgrasp_drake.station.scenario import Scenario
 from catgrasp_drake.systems.grasp_execution import PlanPlayback
 
@@ -227,6 +238,34 @@ def station_snapshot(h: StationHandles, context) -> Snapshot:
     return Snapshot(context.get_time(), X_WO, contacts, X_WH)
 
 
+class FirstMoveWatch:
+    """Watches the object from the start of a trial to ``until`` (s): the first instant it moved
+    (:data:`~catgrasp_drake.station.judge.FIRST_MOVE_TILT_DEG`, :data:`~catgrasp_drake.station.judge.FIRST_MOVE_SHIFT_M`
+    from ``X_WO_start``) and whether a robot body (hand or arm) touched it then, as a
+    :class:`~catgrasp_drake.station.judge.FirstMove` (``first``; None until it moves). ``update`` is called by the
+    simulator's monitor after every step; it reads the object's pose, and the contacts once, at the first move."""
+
+    def __init__(self, h: StationHandles, until: float):
+        self._h, self._until = h, float(until)
+        self.X_WO_start: np.ndarray | None = None
+        self.first: FirstMove | None = None
+
+    def update(self, context) -> None:
+        if self.X_WO_start is None or self.first is not None or context.get_time() > self._until:
+            return
+        h = self._h
+        plant_ctx = h.plant.GetMyContextFromRoot(context)
+        X_WO = h.plant.EvalBodyPoseInWorld(plant_ctx, h.object_body).GetAsMatrix4()
+        shift = float(np.linalg.norm(X_WO[:3, 3] - self.X_WO_start[:3, 3]))
+        if shift <= FIRST_MOVE_SHIFT_M and tilt_deg(self.X_WO_start, X_WO) <= FIRST_MOVE_TILT_DEG:
+            return
+        results = h.plant.get_contact_results_output_port().Eval(plant_ctx)
+        obj, robot = h.plant.GetModelInstanceName(h.object_instance), {h.hand_name, h.arm_name}
+        touching = any(c.involves(obj) and (c.model_a() in robot or c.model_b() in robot)
+                       for c in contacts_from_results(h.plant, h.scene_graph.model_inspector(), results))
+        self.first = FirstMove(round(context.get_time(), 6), touching)
+
+
 def _finite_or_none(value: float, digits: int = 6) -> float | None:
     """``value`` rounded, or None for nan (keeps ``TrialResult.outcome()`` comparable and JSON-clean)."""
     return round(float(value), digits) if np.isfinite(value) else None
@@ -353,9 +392,12 @@ def simulate_and_judge(diagram, context, station: StationHandles, timeline, spec
     simulator.set_target_realtime_rate(0.0)
     deadline = time.monotonic() + float(max_wall_s)
 
-    def monitor(_context):
+    watch = FirstMoveWatch(station, timeline.close)
+
+    def monitor(root_context):
         if time.monotonic() > deadline:
             return EventStatus.Failed(None, f"wall-clock limit of {max_wall_s:.0f} s reached")
+        watch.update(root_context)
         return EventStatus.Succeeded()
 
     simulator.set_monitor(monitor)
@@ -372,10 +414,11 @@ def simulate_and_judge(diagram, context, station: StationHandles, timeline, spec
         else:
             simulator.Initialize(initialize_params)
         initial = station_snapshot(station, context)
+        watch.X_WO_start = initial.X_WO
         if on_phase is not None:
             on_phase("start", context)
         advance_to(timeline.close)
-        before_close = station_snapshot(station, context)
+        before_close = replace(station_snapshot(station, context), first_move=watch.first)
         snapshots = []
         for t in (timeline.hold, timeline.shake, timeline.press, timeline.end):
             if stop_when_decided:

@@ -32,7 +32,10 @@ Rules (first failing rule names ``failure_reason``):
    (its z axis turned) by more than ``push_tilt_deg`` (30°) from its initial
    pose. Smaller nudges and turns about the vertical (fingers brushing a
    light bottle on the reach) are not failures by themselves: the outcome
-   after the lift, hold and disturbance decides.
+   after the lift, hold and disturbance decides. ``fell_by_itself`` instead
+   when the object was knocked away so but began to move with no robot body
+   touching it (the closing snapshot's :class:`FirstMove`, watched during the
+   simulation): an object that does not stand, not a grasp that hit it.
 2. Lift and hold, at ``after_hold`` (``partners`` = the model instances
    touching the object; ``lifted`` = the object's rise at the end of the
    lift (``after_lift``) is at least ``min_rise``, 10 cm, not a fraction of
@@ -186,13 +189,35 @@ class JudgeSpec:
 
 
 @dataclass(frozen=True)
+class FirstMove:
+    """When the object first moved before the closing, and whether a robot body touched it then.
+
+    "Moved": turned (its z axis) by more than :data:`FIRST_MOVE_TILT_DEG` or shifted by more than
+    :data:`FIRST_MOVE_SHIFT_M` from its pose at the start of the trial. ``time`` in s.
+    """
+
+    time: float
+    robot_contact: bool
+
+
+#: The object has "moved" (:class:`FirstMove`) once it turned by this much (deg) or shifted by this much (m).
+FIRST_MOVE_TILT_DEG = 1.0
+FIRST_MOVE_SHIFT_M = 0.002
+
+
+@dataclass(frozen=True)
 class Snapshot:
-    """The object's pose, the hand base pose (``X_WH``, optional) and the contacts at one instant."""
+    """The object's pose, the hand base pose (``X_WH``, optional) and the contacts at one instant.
+
+    ``first_move`` (the snapshot at the closing only; None: not watched, or it did not move) says whether the
+    object began to move with a robot body touching it or by itself.
+    """
 
     time: float
     X_WO: np.ndarray
     contacts: tuple[ContactRecord, ...] = ()
     X_WH: np.ndarray | None = None
+    first_move: FirstMove | None = None
 
 
 @dataclass(frozen=True)
@@ -414,9 +439,14 @@ def _rules(spec, initial, before_close, after_lift, after_hold, after_shake, end
     tipped = tilt_deg(initial.X_WO, before_close.X_WO)
     if push > spec.push_tolerance or tipped > spec.push_tilt_deg:
         turned = rotation_deg(initial.X_WO, before_close.X_WO)
-        return verdict(False, False, "collision_before_closing",
-                       f"object pushed {push * 100:.1f} cm, tipped {tipped:.0f} deg "
-                       f"(turned {turned:.0f} deg) before closing")
+        moved = (f"object pushed {push * 100:.1f} cm, tipped {tipped:.0f} deg "
+                 f"(turned {turned:.0f} deg) before closing")
+        first = before_close.first_move
+        if first is not None and not first.robot_contact:
+            return verdict(False, False, "fell_by_itself",
+                           f"{moved}; it began to move at {first.time:.2f} s with no robot body touching it: "
+                           "it does not stand by itself")
+        return verdict(False, False, "collision_before_closing", moved)
 
     # 2. lift and hold
     if after_lift is None or after_hold is None:

@@ -56,3 +56,20 @@ def test_the_rejected_draw_falls_by_itself_and_the_least_stable_committed_drill_
     write_instance(_first_draw_of_val_drill_09(), "drill_09", tmp_path / "drill_09", seed)
     assert tilt_after("drill", "drill_09", tmp_path / "drill_09", 1.5) > 45.0
     assert tilt_after("drill", "drill_11", None, 1.5) < 2.0
+
+
+@pytest.mark.slow
+def test_a_trial_on_the_rejected_draw_is_judged_fell_by_itself(tmp_path):
+    """The drill grasp on the 2.5 deg draw: the drill tips over before the hand arrives, and the judge says so
+    (``fell_by_itself``: no robot body touched it when it began to move), not ``collision_before_closing``.
+    (A robot that knocks an object over stays ``collision_before_closing``: tests/station/test_judge.py.)"""
+    from catgrasp_drake.station.handwritten import load_handwritten_motion
+    from catgrasp_drake.station.scenario import load_scenario, with_instance
+    from catgrasp_drake.trial import run_grasp_trial
+
+    seed = instance_seed("drill", 9, VAL_SEED)
+    write_instance(_first_draw_of_val_drill_09(), "drill_09", tmp_path / "drill_09", seed)
+    scenario = with_instance(load_scenario("drill_default"), "drill_09", category="drill",
+                             model_dir=str(tmp_path / "drill_09"))
+    r = run_grasp_trial(scenario, load_handwritten_motion("drill", "drill_09", annotations_dir=tmp_path / "drill_09"))
+    assert r.failure_reason == "fell_by_itself" and "no robot body touching it" in r.detail

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -10,6 +11,7 @@ import pytest
 from catgrasp_drake.errors import InputError
 from catgrasp_drake.station.judge import (
     ContactRecord,
+    FirstMove,
     JudgeSpec,
     Snapshot,
     decided_failure,
@@ -260,6 +262,20 @@ def test_tipped_before_closing_fails_but_turn_about_vertical_does_not():
     # brushed round 25 deg on the table, then grasped and held: judged by the outcome
     v = judge(_spec(), *_snaps(X_before=_X(yaw=np.radians(25))))
     assert v.grasp_success and v.functional_success
+
+
+def test_an_object_that_began_to_move_untouched_fell_by_itself():
+    initial, before, *later = _snaps(X_before=_X(roll=np.radians(80)))
+    alone = replace(before, first_move=FirstMove(0.10, robot_contact=False))
+    v = judge(_spec(), initial, alone, *later)
+    assert v.failure_reason == "fell_by_itself" and "tipped 80 deg" in v.detail and "at 0.10 s" in v.detail
+    assert decided_failure(_spec(), initial, alone).failure_reason == "fell_by_itself"
+    pushed = replace(before, first_move=FirstMove(0.10, robot_contact=True))
+    assert judge(_spec(), initial, pushed, *later).failure_reason == "collision_before_closing"
+    # moved untouched but not knocked away (a small lean): the outcome decides, as for any nudge
+    initial, before, *later = _snaps(X_before=_X(roll=np.radians(10)))
+    v = judge(_spec(), initial, replace(before, first_move=FirstMove(0.10, robot_contact=False)), *later)
+    assert v.functional_success
 
 
 def test_dropped_and_not_lifted():
