@@ -36,16 +36,15 @@ from catgrasp_drake.robot.models import HAND_BASE_LINK, INDEX_DISTAL_LINK, load_
 from catgrasp_drake.runner import code_fingerprint
 from catgrasp_drake.station.builder import StationHandles, add_station, apply_context_knobs, posture_category
 from catgrasp_drake.station.judge import (
-    FIRST_MOVE_SHIFT_M,
-    FIRST_MOVE_TILT_DEG,
     ContactRecord,
     FirstMove,
     JudgeSpec,
     Snapshot,
     Verdict,
     decided_failure,
+    has_moved,
     judge,
-    tilt_deg,
+    object_partners,
 )
 from catgrasp_drake.station.scenario import Scenario
 from catgrasp_drake.systems.grasp_execution import PlanPlayback
@@ -254,16 +253,12 @@ class FirstMoveWatch:
         if self.X_WO_start is None or self.first is not None or context.get_time() > self._until:
             return
         h = self._h
-        plant_ctx = h.plant.GetMyContextFromRoot(context)
-        X_WO = h.plant.EvalBodyPoseInWorld(plant_ctx, h.object_body).GetAsMatrix4()
-        shift = float(np.linalg.norm(X_WO[:3, 3] - self.X_WO_start[:3, 3]))
-        if shift <= FIRST_MOVE_SHIFT_M and tilt_deg(self.X_WO_start, X_WO) <= FIRST_MOVE_TILT_DEG:
+        X_WO = h.plant.EvalBodyPoseInWorld(h.plant.GetMyContextFromRoot(context), h.object_body).GetAsMatrix4()
+        if not has_moved(self.X_WO_start, X_WO):
             return
-        results = h.plant.get_contact_results_output_port().Eval(plant_ctx)
-        obj, robot = h.plant.GetModelInstanceName(h.object_instance), {h.hand_name, h.arm_name}
-        touching = any(c.involves(obj) and (c.model_a() in robot or c.model_b() in robot)
-                       for c in contacts_from_results(h.plant, h.scene_graph.model_inspector(), results))
-        self.first = FirstMove(round(context.get_time(), 6), touching)
+        obj = h.plant.GetModelInstanceName(h.object_instance)
+        partners = object_partners(station_snapshot(h, context).contacts, obj)
+        self.first = FirstMove(round(context.get_time(), 6), bool(partners & {h.hand_name, h.arm_name}))
 
 
 def _finite_or_none(value: float, digits: int = 6) -> float | None:

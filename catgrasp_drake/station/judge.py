@@ -205,6 +205,12 @@ FIRST_MOVE_TILT_DEG = 1.0
 FIRST_MOVE_SHIFT_M = 0.002
 
 
+def has_moved(X_WO_start: np.ndarray, X_WO: np.ndarray) -> bool:
+    """Whether the object at ``X_WO`` has moved from ``X_WO_start`` in the sense of :class:`FirstMove`."""
+    shift = float(np.linalg.norm(X_WO[:3, 3] - X_WO_start[:3, 3]))
+    return shift > FIRST_MOVE_SHIFT_M or tilt_deg(X_WO_start, X_WO) > FIRST_MOVE_TILT_DEG
+
+
 @dataclass(frozen=True)
 class Snapshot:
     """The object's pose, the hand base pose (``X_WH``, optional) and the contacts at one instant.
