@@ -504,8 +504,9 @@ def _cmd_import_object(args) -> int:
         from catgrasp_drake.planning.fit import hand_fit
         from catgrasp_drake.station.handwritten import handwritten_trial
 
-        hand = hand_fit(*handwritten_trial(object_dir=imported.directory))
-        print(f"  hand fit   the {imported.category} hand-written grasp on its region: {hand.summary()}")
+        hand = hand_fit(*handwritten_trial(object_dir=imported.directory, grasp_file=args.grasp))
+        which = f"grasp {Path(args.grasp).name}" if args.grasp else f"{imported.category} hand-written grasp"
+        print(f"  hand fit   the {which} on its region: {hand.summary()}")
     except InputError as e:  # e.g. no region the category's grasp is anchored on
         hand = None
         print(f"  hand fit   not checked: {e}")
@@ -524,7 +525,8 @@ def _cmd_import_object(args) -> int:
         print(f"warning: the fit's confidence {imported.confidence:.2f} is below {LOW_CONFIDENCE}: check {png} "
               "and pass --transform if the alignment is wrong", file=sys.stderr)
     if hand is not None and not hand.plannable:
-        print("warning: the category's grasp does not fit it (the preshaped hand lies inside it wherever the planner "
+        grasp = "the grasp" if args.grasp else "the category's grasp"
+        print(f"warning: {grasp} does not fit it (the preshaped hand lies inside it wherever the planner "
               "may move it): expect collision_before_closing", file=sys.stderr)
     print(f"use it: catgrasp demo --object {imported.directory}" + (f" --model {args.model}" if args.model else ""))
     return 0
@@ -561,7 +563,7 @@ def _cmd_film(args) -> int:
         instance = args.instance or _check_category(args.category)[0]
         _check_instances(args.category, [instance], "--instance")
     scenario, motion = handwritten_trial(args.category, instance, object_dir=args.object, seed=args.seed,
-                                         shift_O=args.shift)
+                                         shift_O=args.shift, grasp_file=args.grasp)
     instance = scenario.object.instance
     out = Path(args.out or f"out/film/{instance}_handwritten.png")
     result = film_grasp(scenario, motion, out, closeup=args.closeup, size=tuple(args.size) if args.size else None)
@@ -856,6 +858,8 @@ def build_parser() -> argparse.ArgumentParser:
     i.add_argument("--transform", default=None, metavar='"RX RY RZ X Y Z"',
                    help="the alignment, stated: roll pitch yaw (deg) and x y z (m), canonical <- file "
                         "(default: automatic)")
+    i.add_argument("--grasp", default=None, metavar="FILE",
+                   help="the grasp file whose fit is reported (default: models/grasps/<category>_handwritten.yaml)")
     i.add_argument("--name", default=None, help="instance name (default: from the file name)")
     i.add_argument("--model", default=None, help="category model file (default: models/trained/<category>.npz)")
     i.add_argument("--out", default=None, metavar="DIR",
@@ -871,6 +875,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="seed of a random placement (default: the scenario's pose)")
     f.add_argument("--shift", type=float, nargs=3, metavar=("DX", "DY", "DZ"), default=None,
                    help="move the hand-written grasp by this much (m, object frame)")
+    f.add_argument("--grasp", default=None, metavar="FILE",
+                   help="a grasp file to film instead of the category's (models/grasps/<category>_handwritten.yaml)")
     f.add_argument("--record", default=None, metavar="FILE", help="a benchmark records file: film its --index trial")
     f.add_argument("--index", type=_int_at_least(0), default=0, help="the record's position in --record (from 0)")
     f.add_argument("--data", default="out/benchmark/data", help="where the benchmark's objects are generated")

@@ -182,14 +182,15 @@ def moved_about(motion: GraspMotion, pivot_O, shift_O, rotate_deg=(0.0, 0.0, 0.0
 
 
 def handwritten_trial(category: str | None = None, instance: str | None = None, *, object_dir=None,
-                      seed: int | None = None, shift_O=None):
+                      seed: int | None = None, shift_O=None, grasp_file: str | Path | None = None):
     """The scenario and the hand-written grasp (object frame) of one trial: ``(Scenario, GraspMotion)``.
 
     The object is the embedded ``instance`` of ``category`` (None: the category's default scenario's), or
     the imported object in ``object_dir`` (``catgrasp import-object``; its category, which ``category`` must
     match when given); placed by ``seed`` (:func:`~catgrasp_drake.station.scenario.random_placement`; None:
-    the scenario's pose); the grasp moved by ``shift_O`` (m, O; :func:`shifted_motion`). What
-    ``catgrasp film`` and ``diagrams/trace_trial.py`` run."""
+    the scenario's pose); the grasp moved by ``shift_O`` (m, O; :func:`shifted_motion`); ``grasp_file``: a grasp
+    file to run instead of the category's (``models/grasps/<category>_handwritten.yaml``; e.g. a searched one).
+    What ``catgrasp film`` and ``diagrams/trace_trial.py`` run."""
     if object_dir is not None:
         obj_category, instance = imported_object(object_dir)
         if category not in (None, obj_category):
@@ -203,7 +204,7 @@ def handwritten_trial(category: str | None = None, instance: str | None = None, 
     if seed is not None:
         scenario = random_placement(scenario, seed)
     instance = scenario.object.instance
-    motion = load_handwritten_motion(category, instance, annotations_dir=object_dir)
+    motion = load_handwritten_motion(category, instance, grasp_file, annotations_dir=object_dir)
     if shift_O is not None:
         motion = shifted_motion(motion, category, instance, shift_O, annotations_dir=object_dir)
     return scenario, motion

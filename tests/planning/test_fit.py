@@ -13,10 +13,11 @@ from catgrasp_drake.planning.fit import hand_fit
 from catgrasp_drake.station.handwritten import handwritten_trial, load_handwritten_motion
 from catgrasp_drake.station.scenario import load_scenario, with_instance
 from catgrasp_drake.trial import plan_for, trial_diagram
+from tests.conftest import S17_SPRAY_GRASP
 
 
-def _fit(category, name, directory=None):
-    scenario, motion = handwritten_trial(category, name, object_dir=directory)
+def _fit(category, name, directory=None, grasp_file=None):
+    scenario, motion = handwritten_trial(category, name, object_dir=directory, grasp_file=grasp_file)
     return scenario, motion, hand_fit(scenario, motion)
 
 
@@ -48,7 +49,8 @@ def test_a_deep_bottle_moves_the_grasp_as_the_planner_does(deep_bottles):
 
 
 def test_a_hand_no_move_clears_is_refused_as_the_planner_refuses_it(deep_bottles):
-    scenario, motion, fit = _fit("spray_bottle", "spray_bottle_02_deep", deep_bottles["spray_bottle_02"])
+    scenario, motion, fit = _fit("spray_bottle", "spray_bottle_02_deep", deep_bottles["spray_bottle_02"],
+                                 S17_SPRAY_GRASP)
     assert not fit.plannable and fit.depth_m > 0.015
     assert "refuses the grasp" in fit.summary()
     plan = plan_for(trial_diagram(scenario), motion.in_world(scenario.X_WO()))
@@ -71,10 +73,11 @@ def test_import_object_reports_the_fit_and_warns_when_the_grasp_cannot_fit(deep_
     directory = deep_bottles["spray_bottle_02"]  # in the canonical frame: the stated trigger is its annotated one
     trigger = json.loads((directory / "annotations.json").read_text())["regions"]["trigger"]["center"]
     argv = ["import-object", str(directory / "spray_bottle_02_deep.obj"), "--category", "spray_bottle",
-            "--region", "trigger", *map(str, trigger), "--out", str(tmp_path / "obj")]
+            "--region", "trigger", *map(str, trigger), "--grasp", str(S17_SPRAY_GRASP), "--out", str(tmp_path / "obj")]
     assert main(argv) == 0
     out, err = capsys.readouterr()
     line = next(ln for ln in out.splitlines() if ln.strip().startswith("hand fit"))
+    assert "grasp spray_bottle_grasp_s17.yaml" in line
     assert "inside the object" in line and "refuses the grasp" in line
     assert "expect collision_before_closing" in err
 
@@ -99,7 +102,7 @@ def test_backing_the_hand_away_delays_every_first_contact():
     from catgrasp_drake.planning.fit import closing_contacts
     from catgrasp_drake.station.handwritten import moved_about
 
-    scenario, motion = handwritten_trial("spray_bottle", "spray_bottle_01")
+    scenario, motion = handwritten_trial("spray_bottle", "spray_bottle_01", grasp_file=S17_SPRAY_GRASP)
     palm_O = motion.pose("grasp")[:3, 1]  # H +y: the approach direction, into the object
     near = {c.finger: c.fraction for c in closing_contacts(scenario, motion)}
     far = {c.finger: c.fraction for c in closing_contacts(scenario, moved_about(motion, np.zeros(3), -0.03 * palm_O))}

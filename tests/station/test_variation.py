@@ -171,14 +171,17 @@ def test_the_search_runs_on_imported_objects_keyed_by_their_files(tmp_path, monk
 
 def test_a_search_trial_on_a_stretched_bottle_is_the_hand_written_grasp_on_that_bottle(tmp_path):
     """The task the search runs, on an imported object: the committed bottle 03 at 1.2x has a trigger gap
-    (18.8 mm) wider than the index finger's distal phalanx (17.2 mm), and the hand-written grasp's index ends
-    in it, on the neck (benchmarks/results/experiments/s26_trigger_gap)."""
+    (18.8 mm) wider than the index finger's distal phalanx (17.2 mm), and the session-17 spray grasp's index
+    ends in it, on the neck (benchmarks/results/experiments/s26_trigger_gap; the grasp pinned as a fixture)."""
     from catgrasp_drake.data.stretch import STRESS_FAMILIES, stretch_instance
     from catgrasp_drake.grasp_search import search_trial_task
 
     big = stretch_instance("spray_bottle", "spray_bottle_03", STRESS_FAMILIES["large"], tmp_path / "b",
                            "spray_bottle_03_large").directory
     nominal = perturbation(Robustness(), "spray_bottle_03_large", 0)
+    from tests.conftest import S17_SPRAY_GRASP
+
     r = search_trial_task({"category": "spray_bottle", "instance": "spray_bottle_03_large", "model_dir": str(big),
-                           "perturbation": nominal, "variation": [0.0] * len(VARIATION_NAMES)})
+                           "perturbation": nominal, "variation": [0.0] * len(VARIATION_NAMES),
+                           "grasp_file": str(S17_SPRAY_GRASP)})
     assert r["grasp"] and not r["functional"] and r["reason"] == "trigger_missed"
