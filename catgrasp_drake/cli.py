@@ -420,24 +420,31 @@ def _cmd_benchmark(args) -> int:
 
 
 def _cmd_report(args) -> int:
-    from catgrasp_drake.benchmark.report import benchmark_tables, check_markdown, load_benchmark_records, report
+    from catgrasp_drake.benchmark.report import (
+        benchmark_tables,
+        check_markdown,
+        committed_models,
+        load_benchmark_records,
+        report,
+    )
 
     paths = args.records or sorted(str(p) for p in Path("benchmarks/results").glob("*.jsonl"))
     if not paths:
         raise InputError("no records: pass --records FILE... or run 'catgrasp benchmark' first")
     if args.print:
-        print(benchmark_tables(load_benchmark_records(paths)), end="")
+        print(benchmark_tables(load_benchmark_records(paths), committed=committed_models()), end="")
         return 0
     if args.check:
         records = load_benchmark_records(paths)
-        stale = {md: check_markdown(md, records) for md in args.markdown}
+        models = committed_models()
+        stale = {md: check_markdown(md, records, models) for md in args.markdown}
         stale = {md: m for md, m in stale.items() if m}
         for md, markers in stale.items():
             print(f"{md}: out of date: {', '.join(markers)} (run 'catgrasp report')")
         if not stale:
             print(f"{', '.join(args.markdown)}: tables match {len(records)} records")
         return 1 if stale else 0
-    written = report(paths, args.markdown)
+    written = report(paths, args.markdown, committed=committed_models())
     print(f"rebuilt the benchmark tables of {', '.join(map(str, written))} from {len(paths)} record files")
     return 0
 

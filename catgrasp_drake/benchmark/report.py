@@ -322,7 +322,7 @@ def _difference_rows(records: Sequence[dict]) -> list[list[str]]:
     return rows
 
 
-def _split_section(split: str, records: Sequence[dict]) -> list[str]:
+def _split_section(split: str, records: Sequence[dict], committed: Mapping[str, str] | None = None) -> list[str]:
     title = _split_title(split)
     seeds = sorted({r["data_seed"] for r in records if r.get("data_seed") is not None})
     if seeds:
@@ -333,8 +333,11 @@ def _split_section(split: str, records: Sequence[dict]) -> list[str]:
     for category in categories:
         for view in views:
             rs = _select(records, category=category, view=view)
+            other = _other_model(rs, committed)
+            note = (f" († {other} of these {len(rs)} trials were run with another {_category(category)} model "
+                    "than the committed one)") if other else ""
             if rs:
-                out += [f"**{_category(category)}, {view} view**", "",
+                out += [f"**{_category(category)}, {view} view**{note}", "",
                         _table(_RATE_HEADER, _RATE_ALIGN, _method_rows(rs, stratified=False)), ""]
     if all(c in categories for c in POOLED):
         for view in views:
@@ -512,10 +515,12 @@ def _cost_section(records: Sequence[dict]) -> list[str]:
                     "median plan"), ("l", "l", "r", "r", "r", "r", "r", "r"), rows), ""]
 
 
-def benchmark_tables(records: Iterable[dict]) -> str:
+def benchmark_tables(records: Iterable[dict], *, committed: Mapping[str, str] | None = None) -> str:
     """Every benchmark table as Markdown (the ``full`` marker; module docstring). Deterministic.
 
-    InputError if a record lacks a field of :data:`REQUIRED_FIELDS` or two records are the same trial.
+    ``committed``: ``{category: model sha256}`` (:func:`committed_models`); a split's category table any of whose
+    trials carry another ``model_sha256`` says how many. InputError if a record lacks a field of
+    :data:`REQUIRED_FIELDS` or two records are the same trial.
     """
     records = _tabled(_validated(records, unique=True))
     if not records:
@@ -525,7 +530,7 @@ def benchmark_tables(records: Iterable[dict]) -> str:
            f"instances, all trials of a drawn instance together; {N_BOOT} draws, seed {SEED}]. "
            f"Default physics unless stated.", ""]
     for split in _ordered(_field(default, "split"), SPLITS):
-        out += _split_section(split, _select(default, split=split))
+        out += _split_section(split, _select(default, split=split), committed)
     out += _physics_section(records)
     out += _posterior_section(default)
     out += _more_views_section(default)
@@ -534,10 +539,35 @@ def benchmark_tables(records: Iterable[dict]) -> str:
     return "\n".join(out).rstrip("\n") + "\n"
 
 
-def summary_table(records: Iterable[dict], *, tuning: bool = False) -> str:
+def committed_models() -> dict[str, str]:
+    """``{category: sha256}`` of the committed trained models (``models/trained/<category>.npz``) that exist."""
+    from catgrasp_drake.core.fileio import file_sha256
+    from catgrasp_drake.demo import default_model_path
+
+    return {c: file_sha256(default_model_path(c)) for c in CATEGORIES if default_model_path(c).is_file()}
+
+
+def _other_model(records: Sequence[dict], models: Mapping[str, str] | None) -> int:
+    """How many of ``records`` were run with another model of their category than ``models`` names (0 if
+    ``models`` is None; categories ``models`` does not name, e.g. an example folder's, are not judged)."""
+    if not models:
+        return 0
+    return sum(1 for r in records if r["category"] in models and r.get("model_sha256") != models[r["category"]])
+
+
+OTHER_MODEL_NOTE = ("† some of the row's trials were run with another model of the category than the committed "
+                      "`models/trained/<category>.npz` (their `model_sha256` differs, e.g. an earlier one): re-run "
+                      "them before quoting the row.")
+
+
+def summary_table(records: Iterable[dict], *, tuning: bool = False,
+                  committed: Mapping[str, str] | None = None) -> str:
     """The README's compact table (the ``summary`` marker): per split and category, single view, default physics,
     the latent method's grasp and functional rates and the baseline with the highest functional rate; held-out
-    splits only (not :data:`TUNING_SPLITS`) unless ``tuning`` (the CLI's summary of a tuning run)."""
+    splits only (not :data:`TUNING_SPLITS`) unless ``tuning`` (the CLI's summary of a tuning run).
+
+    ``committed``: ``{category: model sha256}`` (:func:`committed_models`); a row any of whose shown trials (latent's,
+    the baseline's) carry another ``model_sha256`` is marked † (:data:`OTHER_MODEL_NOTE`)."""
     records = [r for r in _tabled(_validated(records, unique=True))
                if r["physics"] == DEFAULT_PHYSICS and r["view"] == "single"
                and (tuning or r["split"] not in TUNING_SPLITS)]
@@ -555,27 +585,30 @@ def summary_table(records: Iterable[dict], *, tuning: bool = False) -> str:
                 f = _outcome(_select(rs, method=method), "functional")
                 if f.mean() > best_rate:  # ties: the earlier method in METHODS
                     best, best_rate = method, float(f.mean())
+            b = _select(rs, method=best) if best is not None else []
             if best is None:
                 base = ["—", "—"]
             else:
-                b = _select(rs, method=best)
                 trials = "" if len(b) == len(latent) else f" ({len(b)} trials)"  # e.g. run on one fresh seed only
                 base = [_label(best) + trials, _rate(_field(b, "instance"), _outcome(b, "functional"))]
             inst = _field(latent, "instance")
-            rows.append([f"`{split}`", _category(category), str(len(latent)),
+            mark = " †" if _other_model(latent + b, committed) else ""  # the trials the row shows
+            rows.append([f"`{split}`", _category(category) + mark, str(len(latent)),
                          _rate(inst, _outcome(latent, "grasp")), _rate(inst, _outcome(latent, "functional"))] + base)
     if not rows:
         return "No single-view benchmark trials."
     table = _table(("split", "category", "trials", "latent grasp", "latent functional", "best baseline",
                     "baseline functional"), ("l", "l", "r", "l", "l", "l", "l"), rows)
+    note = "\n\n" + OTHER_MODEL_NOTE if any(row[1].endswith(" †") for row in rows) else ""
     return (table + "\n\n" + f"Single view, default physics; [{100 * LEVEL:.0f} % interval], percentile bootstrap "
-            f"over instances ({N_BOOT} draws, seed {SEED}). Every table: `docs/benchmark.md`.\n")
+            f"over instances ({N_BOOT} draws, seed {SEED}). Every table: `docs/benchmark.md`.{note}\n")
 
 
-def markdown_tables(records: Iterable[dict]) -> dict[str, str]:
-    """``{marker: Markdown}`` for every marker of :data:`MARKERS`."""
+def markdown_tables(records: Iterable[dict], committed: Mapping[str, str] | None = None) -> dict[str, str]:
+    """``{marker: Markdown}`` for every marker of :data:`MARKERS`; ``committed``: as :func:`benchmark_tables`."""
     records = _validated(records)
-    return {"summary": summary_table(records), "full": benchmark_tables(records)}
+    return {"summary": summary_table(records, committed=committed),
+            "full": benchmark_tables(records, committed=committed)}
 
 
 # ----------------------------------------------------------------------------- Markdown files
@@ -645,26 +678,28 @@ def _markers_in(text: str, path) -> list[str]:
     return names
 
 
-def check_markdown(path: str | Path, records: Iterable[dict]) -> list[str]:
-    """The markers of ``path`` (among :data:`MARKERS`) whose content differs from what ``records`` give."""
+def check_markdown(path: str | Path, records: Iterable[dict], committed: Mapping[str, str] | None = None) -> list[str]:
+    """The markers of ``path`` (among :data:`MARKERS`) whose content differs from what ``records`` give (and
+    ``committed``, as :func:`markdown_tables`)."""
     path = Path(path)
     text = _read_markdown(path)
     names = _markers_in(text, path)
     regions = _regions(text, path, names)
-    tables = markdown_tables(records)
+    tables = markdown_tables(records, committed)
     return [n for n in names if text[regions[n][0]:regions[n][1]].strip("\n") != tables[n].strip("\n")]
 
 
 def report(records_paths: str | Path | Iterable[str | Path], markdown_paths: str | Path | Iterable[str | Path],
-           *, write: bool = True) -> dict[str, str]:
+           *, write: bool = True, committed: Mapping[str, str] | None = None) -> dict[str, str]:
     """Build the tables from the records files and fill every marker found in each Markdown file.
 
     Returns ``{markdown path: its new text}``; writes the files (atomically) unless ``write`` is False.
-    A Markdown file without any marker of :data:`MARKERS` is an InputError.
+    ``committed``: as :func:`markdown_tables`. A Markdown file without any marker of :data:`MARKERS` is an
+    InputError.
     """
     from catgrasp_drake.core.fileio import atomic_write_text
 
-    tables = markdown_tables(load_benchmark_records(records_paths))
+    tables = markdown_tables(load_benchmark_records(records_paths), committed)
     if isinstance(markdown_paths, (str, Path)):
         markdown_paths = [markdown_paths]
     new_texts = {}

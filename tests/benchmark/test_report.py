@@ -14,6 +14,7 @@ from catgrasp_drake.benchmark.report import (
     RECORDS_FORMAT,
     benchmark_tables,
     check_markdown,
+    committed_models,
     load_benchmark_records,
     markdown_tables,
     merged_records,
@@ -385,5 +386,32 @@ def test_report_print_shows_one_files_tables_and_writes_nothing(tmp_path, record
     readme.write_text("# Project\n\n<!-- benchmark:summary -->\n<!-- /benchmark:summary -->\n")
     before = readme.read_text()
     assert main(["report", "--records", str(path), "--print", "--markdown", str(readme)]) == 0
-    assert capsys.readouterr().out == benchmark_tables(records)
+    # marked against the committed models (these synthetic trials carry none)
+    assert capsys.readouterr().out == benchmark_tables(records, committed=committed_models())
     assert readme.read_text() == before
+
+
+def test_rows_run_with_another_model_than_the_committed_one_are_marked():
+    """A row of the summary (and a table of the full report) whose trials carry another ``model_sha256`` than the
+    committed model of their category says so; rows of the committed model, and categories without a committed
+    model (an example folder's), are not marked."""
+    def rec(category, instance, method, sha):
+        return {"split": "test", "category": category, "instance": instance, "trial": 0, "view": "single",
+                "method": method, "physics": "default", "seed": 0, "grasp": True, "functional": True,
+                "reason": None, "timings": {"total": 2.0}, "model_sha256": sha}
+
+    rs = [rec("drill", f"drill_{i}", m, "new") for i in range(2) for m in ("latent", "nearest")]
+    rs += [rec("mug", f"mug_{i}", "latent", "new") for i in range(2)]
+    rs += [rec("mug", f"mug_{i}", "nearest", "new" if i else "old") for i in range(2)]  # one trial of the old model
+    rs += [rec("tankard", "tankard_0", m, "own") for m in ("latent", "nearest")]
+    committed = {"drill": "new", "mug": "new"}
+    summary = summary_table(rs, committed=committed)
+    assert "| `test` | drill | 2 |" in summary and "| `test` | mug † | 2 |" in summary
+    assert "| `test` | tankard | 1 |" in summary
+    assert "† some of the row's trials were run with another model" in summary
+    assert summary_table(rs) == summary_table(rs, committed={})  # nothing to compare with: nothing marked
+    assert "†" not in summary_table(rs)
+    full = benchmark_tables(rs, committed=committed)
+    assert "**mug, single view** († 1 of these 4 trials were run with another mug model" in full
+    assert "**drill, single view**\n" in full
+    assert markdown_tables(rs, committed)["summary"] == summary
