@@ -48,7 +48,7 @@ def main(argv=None) -> int:
         if r is None:
             continue
         scenario, _, _ = trial_scenario(spec)
-        td = make_transfer_diagram(scenario, _model(spec["model"], spec["category"]), view=spec["view"],
+        td = make_transfer_diagram(scenario, _model(spec["_model"], spec["category"]), view=spec["view"],
                                    method=spec["method"])
         context = td.estimator.GetMyMutableContextFromRoot(td.diagram.CreateDefaultContext())
         estimate = td.estimator.estimate_now(context)

@@ -106,7 +106,7 @@ def leave_two_out(category: str, folds: int | None = None) -> list[tuple[list[st
 
 def eval_trial_task(spec: dict) -> dict:
     """Worker task: one test instance, view, method and seed on one fold model -> a JSON-able record."""
-    model = CategoryModel.load(spec["model"], category=spec["category"])
+    model = CategoryModel.load(spec["_model"], category=spec["category"])
     scenario = random_placement(with_instance(load_scenario(f"{spec['category']}_default"), spec["instance"]),
                                 spec["seed"])
     t0 = time.perf_counter()
@@ -150,7 +150,8 @@ def fold_model(config: EvalConfig, fold: int, train: list[str], progress=None) -
 
 
 def trial_specs(config: EvalConfig, models: dict[int, str], folds) -> list[dict]:
-    """One task spec per (test instance, view, method); ``model_sha256`` keys the cache by the model's content."""
+    """One task spec per (test instance, view, method); ``model_sha256`` keys the cache by the model's content
+    (``_model``, its path, is not part of the key: :func:`~catgrasp_drake.runner.task_key`)."""
     digests = {k: file_sha256(m) for k, m in models.items()}
     specs = []
     for k, (_, test) in enumerate(folds):
@@ -160,7 +161,7 @@ def trial_specs(config: EvalConfig, models: dict[int, str], folds) -> list[dict]
             for view in config.views:
                 for method in config.methods:
                     specs.append({"task": "eval_trial", "category": config.category, "fold": k,
-                                  "model": models[k], "model_sha256": digests[k], "instance": instance,
+                                  "_model": models[k], "model_sha256": digests[k], "instance": instance,
                                   "view": view, "method": method, "seed": config.seed})
     return specs
 

@@ -79,7 +79,11 @@ def code_fingerprint(paths: Sequence[str | os.PathLike]) -> str:
 
 
 def task_key(spec: Mapping[str, Any], code_version: str) -> str:
-    return hashlib.sha256((code_version + canonical_json(spec)).encode()).hexdigest()[:24]
+    """The cache key of ``spec`` under ``code_version``. Fields whose name begins with ``_`` are not part of it:
+    where an input lives (e.g. ``_model``, a model file's path) when its content is in the spec under another
+    field (``model_sha256``), so the same model at another path reuses its trials."""
+    keyed = {k: v for k, v in spec.items() if not k.startswith("_")}
+    return hashlib.sha256((code_version + canonical_json(keyed)).encode()).hexdigest()[:24]
 
 
 @dataclass(frozen=True)

@@ -481,7 +481,7 @@ def benchmark_trial_task(spec: dict) -> dict:
     from catgrasp_drake.transfer import make_transfer_diagram, run_transfer
 
     t0 = time.perf_counter()
-    model = _model(spec["model"], spec["category"])
+    model = _model(spec["_model"], spec["category"])
     scenario, placement, camera = trial_scenario(spec)
     td = make_transfer_diagram(scenario, model, view=spec["view"], method=spec["method"],
                                min_confidence=spec["min_confidence"])
@@ -538,7 +538,7 @@ def trial_specs(config: BenchmarkConfig, model_paths: dict[str, str] | None = No
                                   "instance": obj.instance, "model_dir": obj.model_dir, "trial": trial,
                                   "view": view, "method": method, "physics": config.physics, "seed": config.seed,
                                   "noise": bool(config.noise), "min_confidence": float(config.min_confidence),
-                                  "model": path, "model_sha256": sha})
+                                  "_model": path, "model_sha256": sha})
     return specs
 
 
@@ -604,7 +604,7 @@ def film_benchmark_trial(record: dict, path: str | Path, *, data_dir: str | Path
 
     spec = spec_from_record(record, data_dir=data_dir, objects=objects)
     scenario, _, _ = trial_scenario(spec)
-    td = make_transfer_diagram(scenario, _model(spec["model"], spec["category"]), view=spec["view"],
+    td = make_transfer_diagram(scenario, _model(spec["_model"], spec["category"]), view=spec["view"],
                                method=spec["method"], min_confidence=spec["min_confidence"])
     title = f"{spec['instance']} trial {spec['trial']} {spec['method']} ({spec['view']} view)"
     return film_transfer(td, path, title=title, closeup=closeup, size=size), spec

@@ -84,6 +84,17 @@ def test_trial_specs_pair_every_method_on_the_same_trials(tmp_path):
     assert [(s["instance"], s["method"]) for s in specs] == [
         ("drill_00", "latent"), ("drill_00", "rigid"), ("drill_01", "latent"), ("drill_01", "rigid")]
     assert all(s["noise"] and s["physics"] == "default" for s in specs)
+    # a copy of the committed model passed as --model keys the same trials (its path is not in the key)
+    import shutil
+
+    from catgrasp_drake.demo import default_model_path
+    from catgrasp_drake.runner import task_key
+
+    copy = tmp_path / "copy.npz"
+    shutil.copy(default_model_path("drill"), copy)
+    copied = trial_specs(cfg, {"drill": str(copy)})
+    assert [s["_model"] for s in copied] != [s["_model"] for s in specs]
+    assert [task_key(s, "v") for s in copied] == [task_key(s, "v") for s in specs]
     with pytest.raises(InputError, match="methods"):
         BenchmarkConfig(methods=("latent", "magic"))
     with pytest.raises(InputError, match="split"):

@@ -368,7 +368,7 @@ def test_corrupt_report_is_a_one_line_error_naming_it(tmp_path):
 
 
 def test_the_eval_cache_key_follows_the_model_file(tmp_path):
-    """A retrained (different) fold model never reuses the trials of the old one."""
+    """A retrained (different) fold model never reuses the trials of the old one; a copy of it elsewhere does."""
     from catgrasp_drake.evaluation import EvalConfig, leave_two_out, trial_specs
 
     config = EvalConfig(category="drill", methods=("latent",), views=("single",), out_dir=str(tmp_path))
@@ -379,5 +379,8 @@ def test_the_eval_cache_key_follows_the_model_file(tmp_path):
     spec_a = trial_specs(config, {k: str(a) for k in range(len(folds))}, folds)[0]
     shutil.copy(b, a)  # same path, new contents
     spec_b = trial_specs(config, {k: str(a) for k in range(len(folds))}, folds)[0]
-    assert spec_a["model"] == spec_b["model"] and task_key(spec_a, "v") != task_key(spec_b, "v")
+    assert spec_a["_model"] == spec_b["_model"] and task_key(spec_a, "v") != task_key(spec_b, "v")
+    shutil.copy(a, tmp_path / "c.npz")  # the same contents at another path: the same trials
+    spec_c = trial_specs(config, {k: str(tmp_path / "c.npz") for k in range(len(folds))}, folds)[0]
+    assert spec_c["_model"] != spec_b["_model"] and task_key(spec_c, "v") == task_key(spec_b, "v")
 

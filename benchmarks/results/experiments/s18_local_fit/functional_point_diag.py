@@ -23,7 +23,7 @@ def main(path, method="latent"):
         if r["method"] != method:
             continue
         spec = spec_from_record(r)
-        model = _model(spec["model"], spec["category"])
+        model = _model(spec["_model"], spec["category"])
         scenario, _, _ = trial_scenario(spec)
         td = make_transfer_diagram(scenario, model, view=spec["view"], method=spec["method"], min_confidence=0.0)
         ctx = td.diagram.CreateDefaultContext()

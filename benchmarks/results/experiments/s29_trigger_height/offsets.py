@@ -43,7 +43,7 @@ def main(argv=None) -> int:
     for r in records:
         spec = spec_from_record(r, data_dir=ROOT / "out" / "benchmark" / "data")
         scenario, _, _ = trial_scenario(spec)
-        model = _model(spec["model"], spec["category"])
+        model = _model(spec["_model"], spec["category"])
         td = make_transfer_diagram(scenario, model, view=spec["view"], method=spec["method"])
         context = td.diagram.CreateDefaultContext()
         est_ctx = td.estimator.GetMyMutableContextFromRoot(context)

@@ -41,7 +41,7 @@ def main(argv=None) -> int:
     for r in records:
         spec = spec_from_record(r, data_dir=ROOT / "out" / "benchmark" / "data")
         scenario, _, _ = trial_scenario(spec)
-        model = _model(spec["model"], spec["category"])
+        model = _model(spec["_model"], spec["category"])
         X = scenario.X_WO()
         region = "handle" if r["category"] == "mug" else "trigger"
         centre = np.asarray(scenario.object.annotations()["regions"][region]["center"])
