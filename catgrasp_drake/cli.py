@@ -431,12 +431,12 @@ def _cmd_report(args) -> int:
     paths = args.records or sorted(str(p) for p in Path("benchmarks/results").glob("*.jsonl"))
     if not paths:
         raise InputError("no records: pass --records FILE... or run 'catgrasp benchmark' first")
+    models = committed_models()  # rows of other models are marked
     if args.print:
-        print(benchmark_tables(load_benchmark_records(paths), committed=committed_models()), end="")
+        print(benchmark_tables(load_benchmark_records(paths), committed=models), end="")
         return 0
     if args.check:
         records = load_benchmark_records(paths)
-        models = committed_models()
         stale = {md: check_markdown(md, records, models) for md in args.markdown}
         stale = {md: m for md, m in stale.items() if m}
         for md, markers in stale.items():
@@ -444,7 +444,7 @@ def _cmd_report(args) -> int:
         if not stale:
             print(f"{', '.join(args.markdown)}: tables match {len(records)} records")
         return 1 if stale else 0
-    written = report(paths, args.markdown, committed=committed_models())
+    written = report(paths, args.markdown, committed=models)
     print(f"rebuilt the benchmark tables of {', '.join(map(str, written))} from {len(paths)} record files")
     return 0
 

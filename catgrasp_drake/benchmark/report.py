@@ -333,10 +333,10 @@ def _split_section(split: str, records: Sequence[dict], committed: Mapping[str, 
     for category in categories:
         for view in views:
             rs = _select(records, category=category, view=view)
-            other = _other_model(rs, committed)
-            note = (f" († {other} of these {len(rs)} trials were run with another {_category(category)} model "
-                    "than the committed one)") if other else ""
             if rs:
+                other = _other_model(rs, committed)
+                note = (f" († {other} of these {len(rs)} trials were run with another {_category(category)} model "
+                        "than the committed one)") if other else ""
                 out += [f"**{_category(category)}, {view} view**{note}", "",
                         _table(_RATE_HEADER, _RATE_ALIGN, _method_rows(rs, stratified=False)), ""]
     if all(c in categories for c in POOLED):
@@ -571,7 +571,7 @@ def summary_table(records: Iterable[dict], *, tuning: bool = False,
     records = [r for r in _tabled(_validated(records, unique=True))
                if r["physics"] == DEFAULT_PHYSICS and r["view"] == "single"
                and (tuning or r["split"] not in TUNING_SPLITS)]
-    rows = []
+    rows, marked = [], False
     for split in _ordered(_field(records, "split"), SPLITS):
         for category in _ordered(_field(_select(records, split=split), "category"), CATEGORIES):
             rs = _select(records, split=split, category=category)
@@ -592,14 +592,15 @@ def summary_table(records: Iterable[dict], *, tuning: bool = False,
                 trials = "" if len(b) == len(latent) else f" ({len(b)} trials)"  # e.g. run on one fresh seed only
                 base = [_label(best) + trials, _rate(_field(b, "instance"), _outcome(b, "functional"))]
             inst = _field(latent, "instance")
-            mark = " †" if _other_model(latent + b, committed) else ""  # the trials the row shows
-            rows.append([f"`{split}`", _category(category) + mark, str(len(latent)),
+            other = _other_model(latent + b, committed) > 0  # the trials the row shows
+            marked |= other
+            rows.append([f"`{split}`", _category(category) + (" †" if other else ""), str(len(latent)),
                          _rate(inst, _outcome(latent, "grasp")), _rate(inst, _outcome(latent, "functional"))] + base)
     if not rows:
         return "No single-view benchmark trials."
     table = _table(("split", "category", "trials", "latent grasp", "latent functional", "best baseline",
                     "baseline functional"), ("l", "l", "r", "l", "l", "l", "l"), rows)
-    note = "\n\n" + OTHER_MODEL_NOTE if any(row[1].endswith(" †") for row in rows) else ""
+    note = "\n\n" + OTHER_MODEL_NOTE if marked else ""
     return (table + "\n\n" + f"Single view, default physics; [{100 * LEVEL:.0f} % interval], percentile bootstrap "
             f"over instances ({N_BOOT} draws, seed {SEED}). Every table: `docs/benchmark.md`.{note}\n")
 

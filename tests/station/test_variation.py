@@ -175,12 +175,11 @@ def test_a_search_trial_on_a_stretched_bottle_is_the_hand_written_grasp_on_that_
     ends in it, on the neck (benchmarks/results/experiments/s26_trigger_gap; the grasp pinned as a fixture)."""
     from catgrasp_drake.data.stretch import STRESS_FAMILIES, stretch_instance
     from catgrasp_drake.grasp_search import search_trial_task
+    from tests.conftest import S17_SPRAY_GRASP
 
     big = stretch_instance("spray_bottle", "spray_bottle_03", STRESS_FAMILIES["large"], tmp_path / "b",
                            "spray_bottle_03_large").directory
     nominal = perturbation(Robustness(), "spray_bottle_03_large", 0)
-    from tests.conftest import S17_SPRAY_GRASP
-
     r = search_trial_task({"category": "spray_bottle", "instance": "spray_bottle_03_large", "model_dir": str(big),
                            "perturbation": nominal, "variation": [0.0] * len(VARIATION_NAMES),
                            "grasp_file": str(S17_SPRAY_GRASP)})
