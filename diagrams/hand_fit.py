@@ -1,7 +1,7 @@
 """Does the category's hand-written grasp fit each object? The preshaped hand against its true mesh, no simulation.
 
     python diagrams/hand_fit.py [--categories drill spray_bottle mug] [--objects DIR ...] [--posture preshape]
-                                [--closing] [--json FILE]
+                                [--closing] [--grasp FILE] [--json FILE]
 
 For each committed instance of ``--categories`` and each imported object
 (``catgrasp import-object``, the stress split's stretched copies under
@@ -21,6 +21,9 @@ second to a second per object; a trial takes 5-10 s.
 how far into the closing each arrives, with which link, and whether on the category's functional region (the
 trigger or handle), with the hand where the planner's object clearance puts it -- e.g. the index on the
 trigger's side, or the thumb after the fingers have pushed. About 2 s more per object.
+
+``--grasp FILE`` checks another grasp file of the category in place of its hand-written grasp (e.g. an
+earlier or a searched one, as ``catgrasp film --grasp``), anchored on each object's region the same way.
 """
 
 from __future__ import annotations
@@ -49,6 +52,8 @@ def main(argv=None) -> int:
     ap.add_argument("--posture", default="preshape", help="the hand posture checked (open, preshape, closed)")
     ap.add_argument("--closing", action="store_true",
                     help="also the order in which fingers, thumb and palm meet the object as the hand closes")
+    ap.add_argument("--grasp", type=Path, default=None,
+                    help="a grasp file to check instead of the category's hand-written grasp (as catgrasp film)")
     ap.add_argument("--json", type=Path, default=None, help="also write the rows here")
     args = ap.parse_args(argv)
     categories = args.categories if args.categories is not None else ([] if args.objects else
@@ -58,7 +63,7 @@ def main(argv=None) -> int:
     print(f"{'object':26s} {'depth (mm)':>10s}  {'deepest links (mm)':48s} planner")
     rows = []
     for category, name, directory in items:
-        scenario, motion = handwritten_trial(category, name, object_dir=directory)
+        scenario, motion = handwritten_trial(category, name, object_dir=directory, grasp_file=args.grasp)
         category, name = scenario.object.category, scenario.object.instance
         fit = hand_fit(scenario, motion, posture=args.posture)
         links = ", ".join(f"{k.removeprefix('svh_')} {1000 * d:.1f}" for k, d in fit.deepest_links())

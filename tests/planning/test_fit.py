@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from catgrasp_drake.data.stretch import STRESS_FAMILIES, stretch_instance
-from catgrasp_drake.errors import InputError
+from catgrasp_drake.errors import InputError, ModelFileError
 from catgrasp_drake.planning.fit import hand_fit
 from catgrasp_drake.station.handwritten import handwritten_trial, load_handwritten_motion
 from catgrasp_drake.station.scenario import load_scenario, with_instance
@@ -121,3 +121,27 @@ def test_closing_contacts_refuse_bad_input():
         closing_contacts(scenario, motion, region={"center": [0, 0]})
     with pytest.raises(InputError, match="no object mesh"):
         closing_contacts(load_scenario("cylinder_test"), motion)
+
+
+def test_the_hand_fit_script_checks_a_given_grasp_file_in_place_of_the_categorys(deep_bottles, tmp_path, capsys):
+    import importlib.util
+
+    from tests.conftest import REPO
+
+    spec = importlib.util.spec_from_file_location("hand_fit_script", REPO / "diagrams" / "hand_fit.py")
+    script = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(script)
+    directory = deep_bottles["spray_bottle_02"]
+    rows = {}
+    for label, extra in (("committed", []), ("s17", ["--grasp", str(S17_SPRAY_GRASP)])):
+        out = tmp_path / f"{label}.json"
+        assert script.main(["--objects", str(directory), "--json", str(out), *extra]) == 0
+        rows[label] = json.loads(out.read_text())[0]
+    _, _, s17 = _fit("spray_bottle", "spray_bottle_02_deep", directory, S17_SPRAY_GRASP)
+    _, _, committed = _fit("spray_bottle", "spray_bottle_02_deep", directory)
+    # each row is the fit of its own grasp: the session-17 grasp is refused on this bottle (test above)
+    assert rows["s17"]["plannable"] is False and rows["s17"]["depth_mm"] == pytest.approx(1000 * s17.depth_m, abs=0.01)
+    assert rows["committed"]["depth_mm"] == pytest.approx(1000 * committed.depth_m, abs=0.01)
+    assert rows["committed"]["depth_mm"] != rows["s17"]["depth_mm"]
+    with pytest.raises(ModelFileError, match="cannot read hand-written grasp"):
+        script.main(["--objects", str(directory), "--grasp", str(tmp_path / "missing.yaml")])
