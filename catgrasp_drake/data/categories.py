@@ -243,6 +243,11 @@ def _remap(value: float, drawn_in: tuple[float, float], onto: tuple[float, float
 
 
 def build_spray_bottle(p: dict[str, float]) -> GeneratedInstance:
+    """The bottle of :func:`spray_bottle_params`' proportions (m, kg/m^3), base on z = 0, nozzle along +y.
+
+    ``head_back_drop`` (m, optional; never drawn by :func:`spray_bottle_params`): the head's back, from its rear
+    end to the neck's axis, hangs this far below the head's underside, a shroud like the YCB Windex bottle's
+    (whose head's back begins 5 mm above its trigger's centre, where the drawn heads' begin 14-36 mm above)."""
     w, d, h = p["body_width"], p["body_depth"], p["body_height"]
     sh = p["shoulder_height"]
     nr = p["neck_radius"]
@@ -278,6 +283,10 @@ def build_spray_bottle(p: dict[str, float]) -> GeneratedInstance:
         shapes.rounded_box(((0.0), (y0 + y1) / 2 - 0.005, (z0 + z1) / 2), (hw, hl - 0.01, hh), 0.006),
         shapes.rounded_box((0.0, y1 - 0.006, z1 - 0.35 * hh), (0.7 * hw, 0.012, 0.5 * hh), 0.004),
     ])
+    drop = p.get("head_back_drop", 0.0)
+    if drop > 0.0:  # a shroud: the head's back hangs this far below its underside behind the neck (Windex-like)
+        head = head + shapes.rounded_box((0.0, (y0 + oy) / 2, z0 - drop / 2 + 0.003), (hw, oy - y0, drop + 0.006),
+                                         0.006)
     nz = z1 - 0.35 * hh
     nozzle = shapes.cylinder_y(y1 - 0.003, y1 + p["nozzle_length"], p["nozzle_radius"],
                                p["nozzle_radius"] * 0.85, 0.0, nz, shapes.SMALL_SEGMENTS)

@@ -14,6 +14,11 @@ stress``, ``diagrams/handwritten_sweep.py --objects`` and the importer's
 readers. :data:`STRESS_FAMILIES` are the stretches of the benchmark's
 ``stress`` split. Nothing here reads the test split or a real scan: a
 stretched committed instance is still a tuned-on instance, stretched.
+
+:func:`shrouded_instance` is a second kind of tuning copy: a committed spray
+bottle rebuilt from its own generator parameters with a shroud behind the
+neck (``head_back_drop`` of ``data.categories.build_spray_bottle``), the
+head shape of the YCB Windex bottle that the generator never draws.
 """
 
 from __future__ import annotations
@@ -75,3 +80,32 @@ def stretch_instance(category: str, instance: str, stretch, directory: str | Pat
                              stretched_regions(annotations["regions"], s),
                              {"density_kg_m3": solid.density, "stretched_from": instance,
                               "stretch": [float(v) for v in s]})
+
+
+#: A shrouded copy's head reaches down behind the neck to this height above its trigger region's centre (m): the
+#: YCB Windex bottle's 5.4 mm (``benchmarks/results/experiments/s41_windex_thumb``).
+SHROUD_ABOVE_TRIGGER_M = 0.005
+
+
+def shrouded_instance(instance: str, directory: str | Path, name: str | None = None,
+                      above_trigger_m: float = SHROUD_ABOVE_TRIGGER_M) -> WrittenInstance:
+    """Write the committed spray bottle ``instance`` rebuilt from its own parameters with a shroud: the head's
+    back hangs down behind the neck to ``above_trigger_m`` (m) above the trigger region's centre. Trigger region,
+    body and fill are the instance's own. Written into ``directory`` as ``name`` (default ``<instance>_shroud``)
+    like :func:`stretch_instance`; the annotations keep ``shrouded_from``."""
+    from catgrasp_drake.data.categories import REGION_MARGIN_M, build_spray_bottle
+
+    if not (math.isfinite(above_trigger_m) and 0.0 <= above_trigger_m <= 0.03):
+        raise InputError(f"above_trigger_m: expected 0-0.03 m above the trigger's centre, got {above_trigger_m!r}")
+    annotations = load_annotations("spray_bottle", instance)
+    params = dict(annotations["params"])
+    trigger = annotations["regions"]["trigger"]
+    # the region's top (without its margin) is the head's underside, where the shroud starts
+    drop = trigger["half_extents"][2] - REGION_MARGIN_M["trigger"] - above_trigger_m
+    if drop <= 0.0:
+        raise InputError(f"{instance}: its trigger is too short for a shroud {above_trigger_m} m above its centre")
+    generated = build_spray_bottle(params | {"head_back_drop": round(drop, 5)})
+    solid = written_solid(generated.mesh, annotations["density_kg_m3"])
+    return write_model_files(Path(directory), name or f"{instance}_shroud", "spray_bottle", generated.mesh, solid,
+                             float(solid.mass), generated.regions,
+                             {"density_kg_m3": solid.density, "params": generated.params, "shrouded_from": instance})

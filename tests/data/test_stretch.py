@@ -47,3 +47,65 @@ def test_the_stress_families_are_valid_stretches():
     assert set(STRESS_FAMILIES) == {"small", "large", "thin", "deep"}
     for s in STRESS_FAMILIES.values():
         check_stretch(s)
+
+
+# ----------------------------------------------------------------------------- shrouded copies
+def test_a_bottle_rebuilt_from_its_own_parameters_is_the_committed_one_byte_for_byte():
+    from catgrasp_drake.data.categories import build_spray_bottle
+    from catgrasp_drake.data.dataset import instance_mesh_path, obj_bytes
+
+    for name in ("spray_bottle_00", "spray_bottle_11"):  # a flat and a deep bottle: no shroud unless asked
+        annotations = load_annotations("spray_bottle", name)
+        rebuilt = build_spray_bottle(annotations["params"])
+        assert obj_bytes(rebuilt.mesh) == instance_mesh_path("spray_bottle", name).read_bytes()
+        assert rebuilt.regions == annotations["regions"]
+
+
+def _back_begins_m(mesh, top_down_from: float) -> float:
+    """Descending from ``top_down_from``, the height below which the mesh stops reaching 28 mm behind its axis."""
+    z, seen = top_down_from, False
+    while z > 0:
+        section = mesh.section(plane_origin=[0, 0, z], plane_normal=[0, 0, 1])
+        back = section is not None and section.vertices[:, 1].min() <= -0.028
+        if seen and not back:
+            return z + 0.001
+        seen = seen or back
+        z -= 0.001
+    return float("nan")
+
+
+def test_a_shrouded_bottle_hangs_its_head_to_the_windex_height_above_the_trigger_and_keeps_the_rest(tmp_path):
+    from catgrasp_drake.data.stretch import shrouded_instance
+
+    written = shrouded_instance("spray_bottle_11", tmp_path / "s")
+    assert imported_object(tmp_path / "s") == ("spray_bottle", "spray_bottle_11_shroud")
+    ann0, ann = load_annotations("spray_bottle", "spray_bottle_11"), json.loads(
+        (tmp_path / "s" / "annotations.json").read_text())
+    assert ann["regions"] == ann0["regions"] and ann["shrouded_from"] == "spray_bottle_11"
+    assert ann0["mass_kg"] < written.mass_kg < 1.05 * ann0["mass_kg"]  # the shroud is a little more solid
+    trigger_z = ann0["regions"]["trigger"]["center"][2]
+    plain = load_mesh("spray_bottle", "spray_bottle_11")
+    shrouded = read_mesh(tmp_path / "s" / "spray_bottle_11_shroud.obj")
+    top = plain.bounds[1, 2] - 0.002
+    assert _back_begins_m(plain, top) - trigger_z > 0.014  # the generator's heads: 14-36 mm above (s41 experiment)
+    assert _back_begins_m(shrouded, top) - trigger_z == pytest.approx(0.005, abs=0.003)  # the Windex bottle: 5.4 mm
+    with pytest.raises(InputError, match="above_trigger_m"):
+        shrouded_instance("spray_bottle_11", tmp_path / "bad", above_trigger_m=-0.01)
+
+
+def test_on_a_shrouded_bottle_the_thumb_meets_the_head_at_the_index_height_as_on_the_windex_bottle(tmp_path):
+    from catgrasp_drake.data.stretch import shrouded_instance
+    from catgrasp_drake.planning.fit import closing_contacts
+    from catgrasp_drake.station.handwritten import handwritten_trial
+
+    shrouded_instance("spray_bottle_11", tmp_path / "s")
+    first = {}
+    for label, directory, name in (("plain", None, "spray_bottle_11"), ("shroud", tmp_path / "s", None)):
+        scenario, motion = handwritten_trial("spray_bottle", name, object_dir=directory)
+        first[label] = {c.finger: c for c in closing_contacts(scenario, motion)}
+    # the committed grasp's thumb never meets the plain bottle 11 (s41 experiment: thumb_height.txt) ...
+    assert first["plain"]["thumb"].fraction is None
+    # ... and meets the shroud at once, within millimetres of the index's height (the Windex bottle: 6 mm above)
+    thumb, index = first["shroud"]["thumb"], first["shroud"]["index"]
+    assert thumb.fraction == 0.0 and thumb.link.startswith("svh_thumb")
+    assert abs(thumb.point_O[2] - index.point_O[2]) < 0.010
