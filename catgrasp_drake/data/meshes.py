@@ -163,6 +163,26 @@ def tipping_angle_deg(mesh: trimesh.Trimesh, center_of_mass=None) -> float:
     return float(np.degrees(np.arctan2(support_margin(mesh, com), height)))
 
 
+def back_overhang_underside_m(mesh: trimesh.Trimesh, behind_m: float, step_m: float = 0.001,
+                              start_m: float | None = None) -> float:
+    """The height (m, frame O) of the underside of the mesh's topmost part that reaches ``behind_m`` behind its
+    axis (y <= -behind_m): descending from ``start_m`` (default: the top less one step) in horizontal sections
+    every ``step_m``, the lowest height of that first run of sections. NaN when the run reaches the base. E.g. a
+    spray bottle's head: where its back begins (``benchmarks/results/experiments/s41_windex_thumb``)."""
+    if not (behind_m > 0 and step_m > 0):
+        raise InputError(f"back_overhang_underside_m: expected behind_m, step_m > 0, got {behind_m}, {step_m}")
+    z = mesh.bounds[1, 2] - step_m if start_m is None else start_m
+    seen = False
+    while z > 0:
+        section = mesh.section(plane_origin=[0, 0, z], plane_normal=[0, 0, 1])
+        reaches = section is not None and section.vertices[:, 1].min() <= -behind_m
+        if seen and not reaches:
+            return float(z + step_m)
+        seen = seen or reaches
+        z -= step_m
+    return float("nan")
+
+
 def flatten_base(mesh: trimesh.Trimesh, depth_m: float) -> tuple[trimesh.Trimesh, bool]:
     """``mesh`` (upright: z up, base at its lowest point) with its lowest ``depth_m`` cut off by a
     horizontal plane and the cut closed flat (manifold3d's ``trim_by_plane``), then moved down by

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from catgrasp_drake.data.dataset import imported_object, load_annotations, load_mesh
-from catgrasp_drake.data.meshes import read_mesh
+from catgrasp_drake.data.meshes import back_overhang_underside_m, read_mesh
 from catgrasp_drake.data.stretch import STRESS_FAMILIES, check_stretch, stretch_instance
 from catgrasp_drake.errors import InputError
 
@@ -61,19 +61,6 @@ def test_a_bottle_rebuilt_from_its_own_parameters_is_the_committed_one_byte_for_
         assert rebuilt.regions == annotations["regions"]
 
 
-def _back_begins_m(mesh, top_down_from: float) -> float:
-    """Descending from ``top_down_from``, the height below which the mesh stops reaching 28 mm behind its axis."""
-    z, seen = top_down_from, False
-    while z > 0:
-        section = mesh.section(plane_origin=[0, 0, z], plane_normal=[0, 0, 1])
-        back = section is not None and section.vertices[:, 1].min() <= -0.028
-        if seen and not back:
-            return z + 0.001
-        seen = seen or back
-        z -= 0.001
-    return float("nan")
-
-
 def test_a_shrouded_bottle_hangs_its_head_to_the_windex_height_above_the_trigger_and_keeps_the_rest(tmp_path):
     from catgrasp_drake.data.stretch import shrouded_instance
 
@@ -87,8 +74,10 @@ def test_a_shrouded_bottle_hangs_its_head_to_the_windex_height_above_the_trigger
     plain = load_mesh("spray_bottle", "spray_bottle_11")
     shrouded = read_mesh(tmp_path / "s" / "spray_bottle_11_shroud.obj")
     top = plain.bounds[1, 2] - 0.002
-    assert _back_begins_m(plain, top) - trigger_z > 0.014  # the generator's heads: 14-36 mm above (s41 experiment)
-    assert _back_begins_m(shrouded, top) - trigger_z == pytest.approx(0.005, abs=0.003)  # the Windex bottle: 5.4 mm
+    begins = {label: back_overhang_underside_m(m, 0.028, start_m=top) - trigger_z
+              for label, m in (("plain", plain), ("shrouded", shrouded))}
+    assert begins["plain"] > 0.014  # the generator's heads: 14-36 mm above (s41 experiment)
+    assert begins["shrouded"] == pytest.approx(0.005, abs=0.003)  # the Windex bottle: 5.4 mm
     with pytest.raises(InputError, match="above_trigger_m"):
         shrouded_instance("spray_bottle_11", tmp_path / "bad", above_trigger_m=-0.01)
 
@@ -109,3 +98,17 @@ def test_on_a_shrouded_bottle_the_thumb_meets_the_head_at_the_index_height_as_on
     thumb, index = first["shroud"]["thumb"], first["shroud"]["index"]
     assert thumb.fraction == 0.0 and thumb.link.startswith("svh_thumb")
     assert abs(thumb.point_O[2] - index.point_O[2]) < 0.010
+
+
+def test_the_back_overhangs_underside_is_found_on_a_known_shape():
+    import trimesh
+
+    column = trimesh.creation.box((0.02, 0.02, 0.20))  # 20 cm tall, 1 cm behind its axis
+    column.apply_translation([0, 0, 0.10])
+    head = trimesh.creation.box((0.02, 0.06, 0.03))  # reaches 4 cm behind the axis between z = 0.15 and 0.18
+    head.apply_translation([0, -0.01, 0.165])
+    mesh = trimesh.util.concatenate([column, head])
+    assert back_overhang_underside_m(mesh, 0.028, step_m=0.001, start_m=0.175) == pytest.approx(0.150, abs=0.0015)
+    assert np.isnan(back_overhang_underside_m(column, 0.005))  # reaches back all the way down: no underside
+    with pytest.raises(InputError, match="behind_m"):
+        back_overhang_underside_m(mesh, 0.0)

@@ -17,6 +17,8 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
+from catgrasp_drake.data.meshes import back_overhang_underside_m
+
 BACK_REACH_M = 0.028
 STEP_M = 0.002
 
@@ -35,17 +37,8 @@ def head_clearance_mm(directory: Path) -> tuple[float, float]:
     annotations = json.loads((directory / "annotations.json").read_text())
     trigger_z = annotations["regions"]["trigger"]["center"][2]
     mesh = trimesh.load(next(directory.glob("*.obj")), force="mesh")
-    z = mesh.bounds[1, 2] - STEP_M
-    seen_head = False
-    while z > 0:
-        section = mesh.section(plane_origin=[0, 0, z], plane_normal=[0, 0, 1])
-        reaches_back = section is not None and section.vertices[:, 1].min() <= -BACK_REACH_M
-        if reaches_back:
-            seen_head = True
-        elif seen_head:
-            return 1000 * (z + STEP_M - trigger_z), 1000 * trigger_z
-        z -= STEP_M
-    return float("nan"), 1000 * trigger_z
+    underside = back_overhang_underside_m(mesh, BACK_REACH_M, STEP_M)
+    return 1000 * (underside - trigger_z), 1000 * trigger_z
 
 
 def main(directories: list[str]) -> None:
