@@ -28,7 +28,15 @@ from pathlib import Path
 
 import numpy as np
 
-from catgrasp_drake.data.dataset import WrittenInstance, load_annotations, load_mesh, write_model_files, written_solid
+from catgrasp_drake.data.dataset import (
+    WrittenInstance,
+    imported_object,
+    load_annotations,
+    load_mesh,
+    read_annotations,
+    write_model_files,
+    written_solid,
+)
 from catgrasp_drake.errors import InputError
 
 #: The stress split's stretches (sx, sy, sz) of every committed instance, by family name: smaller and larger
@@ -87,17 +95,27 @@ def stretch_instance(category: str, instance: str, stretch, directory: str | Pat
 SHROUD_ABOVE_TRIGGER_M = 0.005
 
 
-def shrouded_instance(instance: str, directory: str | Path, name: str | None = None,
+def shrouded_instance(source: str | Path, directory: str | Path, name: str | None = None,
                       above_trigger_m: float = SHROUD_ABOVE_TRIGGER_M) -> WrittenInstance:
-    """Write the committed spray bottle ``instance`` rebuilt from its own parameters with a shroud: the head's
-    back hangs down behind the neck to ``above_trigger_m`` (m) above the trigger region's centre. Trigger region,
-    body and fill are the instance's own. Written into ``directory`` as ``name`` (default ``<instance>_shroud``)
-    like :func:`stretch_instance`; the annotations keep ``shrouded_from``."""
+    """Write the spray bottle ``source`` rebuilt from its own generator parameters with a shroud: the head's
+    back hangs down behind the neck to ``above_trigger_m`` (m) above the trigger region's centre. ``source`` is a
+    committed instance's name or a generated bottle's object directory (a ``val`` or ``test`` split bottle,
+    written by the generator, so its annotations hold its parameters). Trigger region, body and fill are the
+    bottle's own. Written into ``directory`` as ``name`` (default ``<instance>_shroud``) like
+    :func:`stretch_instance`; the annotations keep ``shrouded_from``."""
     from catgrasp_drake.data.categories import REGION_MARGIN_M, build_spray_bottle
 
     if not (math.isfinite(above_trigger_m) and 0.0 <= above_trigger_m <= 0.03):
         raise InputError(f"above_trigger_m: expected 0-0.03 m above the trigger's centre, got {above_trigger_m!r}")
-    annotations = load_annotations("spray_bottle", instance)
+    if isinstance(source, Path) or Path(source).is_dir():
+        category, instance = imported_object(source)
+        if category != "spray_bottle":
+            raise InputError(f"{source}: a shroud is drawn on spray bottles, not on a {category}")
+        annotations = read_annotations(Path(source) / "annotations.json")
+        if "head_height" not in annotations.get("params", {}):
+            raise InputError(f"{source}: not a generated bottle (its annotations hold no generator parameters)")
+    else:
+        instance, annotations = str(source), load_annotations("spray_bottle", str(source))
     params = dict(annotations["params"])
     trigger = annotations["regions"]["trigger"]
     # the region's top (without its margin) is the head's underside, where the shroud starts

@@ -82,6 +82,25 @@ def test_a_shrouded_bottle_hangs_its_head_to_the_windex_height_above_the_trigger
         shrouded_instance("spray_bottle_11", tmp_path / "bad", above_trigger_m=-0.01)
 
 
+def test_a_bottle_given_by_its_directory_is_shrouded_as_by_its_name_and_other_objects_are_refused(tmp_path):
+    from catgrasp_drake.data.dataset import instance_dir
+    from catgrasp_drake.data.stretch import shrouded_instance
+
+    by_name = shrouded_instance("spray_bottle_03", tmp_path / "a")
+    by_dir = shrouded_instance(instance_dir("spray_bottle", "spray_bottle_03"), tmp_path / "b")
+    assert by_dir.name == by_name.name == "spray_bottle_03_shroud"
+    assert (tmp_path / "a" / "spray_bottle_03_shroud.obj").read_bytes() == (
+        tmp_path / "b" / "spray_bottle_03_shroud.obj").read_bytes()
+    with pytest.raises(InputError, match="spray bottles, not on a drill"):
+        shrouded_instance(instance_dir("drill", "drill_00"), tmp_path / "c")
+    stretch_instance("spray_bottle", "spray_bottle_03", (1.0, 1.0, 1.0), tmp_path / "s", name="copy")
+    ann = json.loads((tmp_path / "s" / "annotations.json").read_text())
+    ann["params"] = {}
+    (tmp_path / "s" / "annotations.json").write_text(json.dumps(ann))
+    with pytest.raises(InputError, match="no generator parameters"):
+        shrouded_instance(tmp_path / "s", tmp_path / "d")
+
+
 def test_on_a_shrouded_bottle_the_thumb_meets_the_head_at_the_index_height_as_on_the_windex_bottle(tmp_path):
     from catgrasp_drake.data.stretch import shrouded_instance
     from catgrasp_drake.planning.fit import closing_contacts
