@@ -1,17 +1,19 @@
 """The same grasp trials through a local Ray head and through local workers give the same outcomes.
 
-The head is started on this machine only (``ray.init`` with ``_node_ip_address="127.0.0.1"``,
+The head is started on this machine only (``runner.start_local_ray``: ``_node_ip_address="127.0.0.1"``,
 no dashboard); Ray 2.60 still registers the node under the machine's own address (measured:
-192.0.2.2 here), so the test checks that the cluster is this one machine.
+192.0.2.2 here), so the test checks that the cluster is this one machine. Its workers must run at
+niceness 0: at Ray's default 15 any other process starves them (a trial 5x slower, session 42).
 """
 
 from __future__ import annotations
 
+import os
 import socket
 
 import pytest
 
-from catgrasp_drake.runner import run_tasks
+from catgrasp_drake.runner import run_tasks, start_local_ray
 from catgrasp_drake.station.handwritten import load_handwritten_motion
 from catgrasp_drake.training import grasp_trial_task
 
@@ -26,6 +28,10 @@ def _specs():
     return out
 
 
+def _niceness() -> int:
+    return os.nice(0)
+
+
 def _outcome(result: dict) -> dict:
     return {k: v for k, v in result.items() if k not in ("wall_time_s", "plan_time_s", "realtime_rate")}
 
@@ -34,7 +40,8 @@ def test_ray_trials_equal_local_trials(tmp_path):
     specs = _specs()
     local = run_tasks(grasp_trial_task, specs, cache_dir=tmp_path / "local", code_version="t", workers=2)
     try:
-        ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False, _node_ip_address="127.0.0.1")
+        start_local_ray(2)
+        assert ray.get(ray.remote(num_cpus=1)(_niceness).remote()) == _niceness()  # as local workers run
         remote = run_tasks(grasp_trial_task, specs, cache_dir=tmp_path / "ray", code_version="t",
                            ray_address="local")
         assert ray.is_initialized()
