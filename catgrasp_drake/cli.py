@@ -617,6 +617,12 @@ def _cmd_search_grasp(args) -> int:
     spec = read_grasp_file(grasp_file, args.category)
     bar = _Progress()
     total = args.rounds
+    best = [-float("inf")]  # over every round so far (each round's own best can be lower than an earlier one)
+
+    def progress(k, X, scores):
+        best[0] = max(best[0], *map(float, scores))
+        bar(f"rounds (best so far {best[0]:.2f}, this round {max(map(float, scores)):.2f})", k + 1, total)
+
     result = search_grasp(args.category, chosen, cem=CemParams(rounds=args.rounds, population=args.population,
                                                                  elite=args.elite, seed=args.seed),
                           robustness=Robustness(perturbations=args.perturbations, seed=args.seed,
@@ -624,7 +630,7 @@ def _cmd_search_grasp(args) -> int:
                           search_std=std,
                           grasp_file=args.grasp, object_dirs=object_dirs, cache_dir=args.cache, workers=args.workers,
                           ray=args.ray,
-                          progress=lambda k, X, s: bar(f"rounds (best so far {max(s):.2f})", k + 1, total))
+                          progress=progress)
     out = Path(args.out or f"out/grasp_search/{args.category}")
     new = apply_variation_to_spec(spec, result.best, args.category, load_hand_postures(spec.get("postures",
                                                                                                 args.category)))
