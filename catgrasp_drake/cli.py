@@ -611,6 +611,16 @@ def _cmd_search_grasp(args) -> int:
         if name not in VARIATION_NAMES:
             raise InputError(f"--freeze: unknown parameter {name!r}; known: {', '.join(VARIATION_NAMES)}")
         std[VARIATION_NAMES.index(name)] = 0.0
+    screen = {}
+    for item in args.screen or ():
+        if Path(item).is_dir():
+            category, name = imported_object(item)
+            if category != args.category:
+                raise InputError(f"--screen: {item} is a {category}, not a {args.category}")
+            screen[name] = item
+        else:
+            _check_instances(args.category, [item], "--screen")
+            screen[item] = None
     grasp_file = Path(args.grasp) if args.grasp else GRASPS_DIR / f"{args.category}_handwritten.yaml"
     if not grasp_file.is_file():
         raise InputError(f"--grasp: no such grasp file {grasp_file}")
@@ -629,7 +639,7 @@ def _cmd_search_grasp(args) -> int:
                                                 mass_scale=tuple(args.mass_scale), height_m=args.height_error),
                           search_std=std,
                           grasp_file=args.grasp, object_dirs=object_dirs, cache_dir=args.cache, workers=args.workers,
-                          ray=args.ray,
+                          ray=args.ray, screen=screen, screen_max_refused=args.screen_max_refused,
                           progress=progress)
     out = Path(args.out or f"out/grasp_search/{args.category}")
     new = apply_variation_to_spec(spec, result.best, args.category, load_hand_postures(spec.get("postures",
@@ -638,6 +648,7 @@ def _cmd_search_grasp(args) -> int:
     header = (f"# Searched by `catgrasp search-grasp --category {args.category} --perturbations {args.perturbations} "
               f"--mass-scale {args.mass_scale[0]:g} {args.mass_scale[1]:g}"
               + (f" --height-error {args.height_error:g}" if args.height_error else "")
+              + (f" --screen <{len(screen)} objects> --screen-max-refused {args.screen_max_refused}" if screen else "")
               + f"` from {grasp_file.name}: robustness "
               f"{result.start_score:.2f} -> {result.best_score:.2f} on {len(chosen)} instances ({', '.join(chosen)}), "
               f"{result.trials} trials.\n")
@@ -922,6 +933,11 @@ def build_parser() -> argparse.ArgumentParser:
                         "that may be full)")
     g.add_argument("--height-error", type=float, default=0.0, metavar="M", help=HEIGHT_ERROR_HELP)
     g.add_argument("--freeze", nargs="+", default=None, help="variation parameters kept at 0 (e.g. dx dy dz)")
+    g.add_argument("--screen", nargs="+", default=None, metavar="OBJECT",
+                   help="committed instances or imported objects' directories on which every candidate is first "
+                        "checked by the planner, without simulation: a candidate refused on more than "
+                        "--screen-max-refused of them scores 0 and is not simulated (e.g. every tuning object)")
+    g.add_argument("--screen-max-refused", type=_int_at_least(0, 10_000), default=0)
     g.add_argument("--seed", type=_int_at_least(0, MAX_SEED), default=0)
     g.add_argument("--cache", default="out/grasp_search/cache", help="trial cache (resumes an interrupted search)")
     g.add_argument("--workers", type=_int_at_least(0, MAX_WORKERS), default=None)

@@ -51,6 +51,26 @@ def search_trial_task(spec: dict) -> dict:
     return run_perturbed_trial(scenario, motion, spec["perturbation"])
 
 
+SCREEN_TASK = "grasp_search_screen"
+
+
+def screen_task(spec: dict) -> dict:
+    """Worker task, no simulation: for each of ``spec["variations"]`` of the category's hand-written grasp, does
+    the planner accept it on one object (``planning.fit.hand_fit``: the preshaped hand at the grasp pose against
+    the true mesh, within the planner's clearance shift)? ``{"status": "ok", "plannable": [bool, ...]}``."""
+    from catgrasp_drake.planning.fit import hand_fit
+    from catgrasp_drake.station.handwritten import load_handwritten_motion
+    from catgrasp_drake.station.scenario import load_scenario, with_instance
+    from catgrasp_drake.station.variation import vary_motion
+
+    category, instance, model_dir = spec["category"], spec["instance"], spec.get("model_dir")
+    motion = load_handwritten_motion(category, instance, spec.get("grasp_file"), annotations_dir=model_dir)
+    scenario = with_instance(load_scenario(f"{category}_default"), instance, category=category, model_dir=model_dir)
+    plannable = [bool(hand_fit(scenario, vary_motion(motion, category, instance, v, annotations_dir=model_dir))
+                      .plannable) for v in spec["variations"]]
+    return {"status": "ok", "plannable": plannable}
+
+
 @dataclass
 class GraspSearchResult:
     """The search's best variation and its record (every candidate, trial and score)."""
@@ -71,7 +91,7 @@ class GraspSearchResult:
 def search_grasp(category: str, instances, *, cem: CemParams = CemParams(), robustness: Robustness = Robustness(),
                  search_std=None, grasp_file: str | None = None, object_dirs=None,
                  cache_dir: str | None = "out/grasp_search/cache", workers: int | None = None, ray: str | None = None,
-                 progress=None) -> GraspSearchResult:
+                 screen=None, screen_max_refused: int = 0, progress=None) -> GraspSearchResult:
     """Cross-entropy search of ``category``'s hand-written grasp (module docstring) on ``instances``.
 
     ``object_dirs``: ``{instance: directory}`` for instances that are imported objects (``catgrasp
@@ -82,6 +102,10 @@ def search_grasp(category: str, instances, *, cem: CemParams = CemParams(), robu
     :data:`~catgrasp_drake.station.variation.VARIATION_SCALE`; 0 freezes a
     parameter). ``grasp_file``: the grasp to start from (default the category's
     ``models/grasps/<category>_handwritten.yaml``); its content is part of every trial's cache key.
+    ``screen``: ``{object: directory or None}`` -- committed instances (None) or imported objects on which every
+    candidate is first checked kinematically (:func:`screen_task`, no simulation, cached like the trials); a
+    candidate the planner refuses on more than ``screen_max_refused`` of them scores 0 and is not simulated (its
+    record lists where it was refused). The screen can hold many more objects than the search simulates on.
     ``progress(round, candidates, scores)`` after each round.
     """
     from catgrasp_drake.runner import code_fingerprint, run_tasks
@@ -103,30 +127,61 @@ def search_grasp(category: str, instances, *, cem: CemParams = CemParams(), robu
     rounds = []
     t0 = time.perf_counter()
 
+    screen = dict(screen or {})
+    screen_where = {i: {"model_dir": str(d), "object_sha256": object_files_sha256(d, i)}
+                    for i, d in screen.items() if d is not None}
+    simulated = [0]
+
+    def refused_on(X: np.ndarray) -> list[list[str]]:
+        """Per candidate, the screen objects on which the planner refuses it."""
+        refused = [[] for _ in X]
+        if not screen:
+            return refused
+        variations = [[round(float(x), 6) for x in v] for v in X]
+        specs = [start | screen_where.get(i, {}) | {"task": SCREEN_TASK, "category": category, "instance": i,
+                                                    "variations": variations} for i in screen]
+        for spec, o in zip(specs, run_tasks(screen_task, specs, cache_dir=cache_dir, code_version=version,
+                                            workers=workers, ray_address=ray)):
+            if o.result.get("status") != "ok":
+                raise InputError(f"screen: checking the grasp on {spec['instance']} failed: {o.result.get('error')}")
+            for j, ok in enumerate(o.result["plannable"]):
+                if not ok:
+                    refused[j].append(spec["instance"])
+        return refused
+
     def evaluate(X: np.ndarray) -> np.ndarray:
+        refused = refused_on(X)
+        kept = [j for j in range(len(X)) if len(refused[j]) <= screen_max_refused]
         specs = [start | where.get(i, {}) | {"task": TASK, "category": category, "instance": i, "perturbation": p,
-                                             "variation": [round(float(x), 6) for x in v]}
-                 for v in X for i, p in perturbations]
+                                             "variation": [round(float(x), 6) for x in X[j]]}
+                 for j in kept for i, p in perturbations]
         outcomes = run_tasks(search_trial_task, specs, cache_dir=cache_dir, code_version=version, workers=workers,
                              ray_address=ray)
+        simulated[0] += len(specs)
         results = [o.result for o in outcomes]
         n = len(perturbations)
-        scores = []
+        scores = np.zeros(len(X))
         entries = []
         for j, v in enumerate(X):
-            trials = results[j * n:(j + 1) * n]
-            score = float(np.mean([trial_score(t, robustness.grasp_weight) for t in trials]))
-            scores.append(score)
-            entries.append({"variation": variation_dict(v), "score": round(score, 4),
-                            "trials": [{"instance": s["instance"], "perturbation": s["perturbation"]} | t
-                                       for s, t in zip(specs[j * n:(j + 1) * n], trials)]})
+            entry = {"variation": variation_dict(v), "score": 0.0}
+            if screen:
+                entry["screen_refused"] = refused[j]
+            if j in kept:
+                k = kept.index(j)
+                trials = results[k * n:(k + 1) * n]
+                scores[j] = float(np.mean([trial_score(t, robustness.grasp_weight) for t in trials]))
+                entry["trials"] = [{"instance": s["instance"], "perturbation": s["perturbation"]} | t
+                                   for s, t in zip(specs[k * n:(k + 1) * n], trials)]
+            else:
+                entry["trials"] = []  # refused by the screen: not simulated
+            entries.append(entry | {"score": round(float(scores[j]), 4)})
         rounds.append(entries)
-        return np.array(scores)
+        return scores
 
     result = cem_maximize(evaluate, np.zeros(len(VARIATION_NAMES)), std, params=cem, on_round=progress)
     return GraspSearchResult(category=category, instances=instances, best=variation_dict(result.best),
                              best_score=result.best_score, start_score=float(result.scores[0][0]), rounds=rounds,
-                             trials=result.evaluations * len(perturbations), wall_s=time.perf_counter() - t0)
+                             trials=simulated[0], wall_s=time.perf_counter() - t0)
 
 
 def apply_variation_to_spec(spec: dict, variation: dict, category: str, postures: dict) -> dict:
