@@ -655,6 +655,9 @@ def _cmd_search_grasp(args) -> int:
     atomic_write_text(out / grasp_file.name, header + yaml.safe_dump(new, sort_keys=False, default_flow_style=None))
     print(f"robustness {result.start_score:.2f} (as written) -> {result.best_score:.2f}; best variation "
           f"{ {k: v for k, v in result.best.items() if v} }; {result.trials} trials in {result.wall_s:.0f} s")
+    if result.screened:
+        print("screen: candidates drawn / refused per round: "
+              + ", ".join(f"{d['drawn']}/{d['infeasible']}" for d in result.screened))
     print(f"wrote {out / 'search.json'} and {out / grasp_file.name} (review, then copy over {grasp_file})")
     return 0
 
@@ -936,7 +939,8 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--screen", nargs="+", default=None, metavar="OBJECT",
                    help="committed instances or imported objects' directories on which every candidate is first "
                         "checked by the planner, without simulation: a candidate refused on more than "
-                        "--screen-max-refused of them scores 0 and is not simulated (e.g. every tuning object)")
+                        "--screen-max-refused of them is drawn again, so each round simulates a full population the "
+                        "planner accepts (up to 40 x population draws a round; e.g. every tuning object)")
     g.add_argument("--screen-max-refused", type=_int_at_least(0, 10_000), default=0)
     g.add_argument("--seed", type=_int_at_least(0, MAX_SEED), default=0)
     g.add_argument("--cache", default="out/grasp_search/cache", help="trial cache (resumes an interrupted search)")

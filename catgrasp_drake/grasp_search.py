@@ -83,6 +83,7 @@ class GraspSearchResult:
     rounds: list = field(default_factory=list)  # per round: [{"variation": {...}, "score": s, "trials": [...]}]
     trials: int = 0
     wall_s: float = 0.0
+    screened: list = field(default_factory=list)  # per round, with a screen: {"drawn": n, "infeasible": m}
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -104,8 +105,10 @@ def search_grasp(category: str, instances, *, cem: CemParams = CemParams(), robu
     ``models/grasps/<category>_handwritten.yaml``); its content is part of every trial's cache key.
     ``screen``: ``{object: directory or None}`` -- committed instances (None) or imported objects on which every
     candidate is first checked kinematically (:func:`screen_task`, no simulation, cached like the trials); a
-    candidate the planner refuses on more than ``screen_max_refused`` of them scores 0 and is not simulated (its
-    record lists where it was refused). The screen can hold many more objects than the search simulates on.
+    candidate the planner refuses on more than ``screen_max_refused`` of them is dropped and another drawn in its
+    place (``cem_maximize``'s ``feasible``), so every round simulates a full population of candidates the planner
+    accepts; only if the round's draws run out is a refused one kept, scored 0 and not simulated (its record
+    lists where it was refused). The screen can hold many more objects than the search simulates on.
     ``progress(round, candidates, scores)`` after each round.
     """
     from catgrasp_drake.runner import code_fingerprint, run_tasks
@@ -132,22 +135,29 @@ def search_grasp(category: str, instances, *, cem: CemParams = CemParams(), robu
                     for i, d in screen.items() if d is not None}
     simulated = [0]
 
+    screened: dict[tuple, list[str]] = {}  # candidate (rounded) -> the screen objects refusing it
+
     def refused_on(X: np.ndarray) -> list[list[str]]:
-        """Per candidate, the screen objects on which the planner refuses it."""
-        refused = [[] for _ in X]
-        if not screen:
-            return refused
-        variations = [[round(float(x), 6) for x in v] for v in X]
-        specs = [start | screen_where.get(i, {}) | {"task": SCREEN_TASK, "category": category, "instance": i,
-                                                    "variations": variations} for i in screen]
-        for spec, o in zip(specs, run_tasks(screen_task, specs, cache_dir=cache_dir, code_version=version,
-                                            workers=workers, ray_address=ray)):
-            if o.result.get("status") != "ok":
-                raise InputError(f"screen: checking the grasp on {spec['instance']} failed: {o.result.get('error')}")
-            for j, ok in enumerate(o.result["plannable"]):
-                if not ok:
-                    refused[j].append(spec["instance"])
-        return refused
+        """Per candidate, the screen objects on which the planner refuses it (each candidate screened once)."""
+        keys = [tuple(round(float(x), 6) for x in v) for v in X]
+        new = list(dict.fromkeys(k for k in keys if k not in screened))
+        if screen and new:
+            refused = {k: [] for k in new}
+            specs = [start | screen_where.get(i, {}) | {"task": SCREEN_TASK, "category": category, "instance": i,
+                                                        "variations": [list(k) for k in new]} for i in screen]
+            for spec, o in zip(specs, run_tasks(screen_task, specs, cache_dir=cache_dir, code_version=version,
+                                                workers=workers, ray_address=ray)):
+                if o.result.get("status") != "ok":
+                    raise InputError(f"screen: checking the grasp on {spec['instance']} failed: "
+                                     f"{o.result.get('error')}")
+                for k, ok in zip(new, o.result["plannable"]):
+                    if not ok:
+                        refused[k].append(spec["instance"])
+            screened.update(refused)
+        return [list(screened.get(k, [])) for k in keys]
+
+    def feasible(X: np.ndarray) -> np.ndarray:
+        return np.array([len(r) <= screen_max_refused for r in refused_on(X)])
 
     def evaluate(X: np.ndarray) -> np.ndarray:
         refused = refused_on(X)
@@ -178,10 +188,11 @@ def search_grasp(category: str, instances, *, cem: CemParams = CemParams(), robu
         rounds.append(entries)
         return scores
 
-    result = cem_maximize(evaluate, np.zeros(len(VARIATION_NAMES)), std, params=cem, on_round=progress)
+    result = cem_maximize(evaluate, np.zeros(len(VARIATION_NAMES)), std, params=cem, on_round=progress,
+                          feasible=feasible if screen else None)
     return GraspSearchResult(category=category, instances=instances, best=variation_dict(result.best),
                              best_score=result.best_score, start_score=float(result.scores[0][0]), rounds=rounds,
-                             trials=simulated[0], wall_s=time.perf_counter() - t0)
+                             trials=simulated[0], wall_s=time.perf_counter() - t0, screened=result.draws)
 
 
 def apply_variation_to_spec(spec: dict, variation: dict, category: str, postures: dict) -> dict:

@@ -14,6 +14,14 @@ floor ``min_std`` so the search does not collapse on a noisy score). The
 best candidate over all rounds is returned with its score, so the result is
 never worse than the start as measured. Seeded: the same inputs and ``seed``
 give the same candidates.
+
+With a cheap ``feasible`` test (e.g. a kinematic screen of a grasp on many
+objects), each round's population is filled by rejection: candidates are
+drawn in batches of ``draw_batch``, the infeasible ones are dropped and drawn
+again, up to ``max_draws`` per round; only then, if the population is still
+short, are the first infeasible draws kept (the caller scores them). So the
+expensive objective is spent on candidates that pass the test, and the elite
+are refitted from a full population.
 """
 
 from __future__ import annotations
@@ -60,6 +68,7 @@ class CemResult:
     std: np.ndarray
     candidates: list = field(default_factory=list)  # per round: (population, d)
     scores: list = field(default_factory=list)  # per round: (population,)
+    draws: list = field(default_factory=list)  # per round, with a feasibility test: {"drawn": n, "infeasible": m}
 
     @property
     def evaluations(self) -> int:
@@ -109,18 +118,45 @@ class CemSearch:
     def done(self) -> bool:
         return self.round >= self.params.rounds
 
-    def ask(self) -> np.ndarray:
-        """This round's candidates (population, d); the first round's first candidate is the start."""
+    def _draw(self, n: int) -> np.ndarray:
+        r = self.result
+        return np.clip(r.mean + r.std * self._rng.standard_normal((n, r.mean.size)), self.lower, self.upper)
+
+    def ask(self, feasible: Callable[[np.ndarray], np.ndarray] | None = None, *, draw_batch: int | None = None,
+            max_draws: int | None = None) -> np.ndarray:
+        """This round's candidates (population, d); the first round's first candidate is the start.
+
+        ``feasible(X (K, d)) -> (K,) bool``: fill the population by rejection (module docstring), drawing
+        ``draw_batch`` candidates at a time (default 4 x population) and at most ``max_draws`` per round
+        (default 40 x population). The start is kept whatever its test says: it is the reference.
+        """
         if self.done:
             raise InputError(f"the search has run its {self.params.rounds} rounds")
         if self._pending is None:
-            r, p = self.result, self.params
-            X = np.clip(r.mean + r.std * self._rng.standard_normal((p.population, r.mean.size)), self.lower,
-                        self.upper)
-            if self.round == 0:
-                X[0] = self._start
+            p = self.params
+            if feasible is None:
+                X = self._draw(p.population)
+                if self.round == 0:
+                    X[0] = self._start
+            else:
+                X = self._draw_feasible(feasible, draw_batch or 4 * p.population, max_draws or 40 * p.population)
             self._pending = X
         return self._pending.copy()
+
+    def _draw_feasible(self, feasible, draw_batch: int, max_draws: int) -> np.ndarray:
+        p = self.params
+        kept = [self._start] if self.round == 0 else []
+        refused, drawn = [], 0
+        while len(kept) < p.population and drawn < max_draws:
+            B = self._draw(min(draw_batch, max_draws - drawn))
+            ok = np.asarray(feasible(B.copy()), dtype=bool).reshape(-1)
+            if ok.shape != (len(B),):
+                raise InputError(f"feasible(...): expected {len(B)} booleans, got {ok.size}")
+            drawn += len(B)
+            kept.extend(B[ok])
+            refused.extend(B[~ok])
+        self.result.draws.append({"drawn": drawn, "infeasible": len(refused)})
+        return np.array((kept + refused)[:p.population])
 
     def tell(self, scores) -> None:
         """Score this round's candidates (population,) and refit the sampling Gaussian to the elite."""
@@ -141,18 +177,21 @@ class CemSearch:
 
 
 def cem_maximize(evaluate: Callable[[np.ndarray], np.ndarray], mean, std, *, lower=None, upper=None,
-                 params: CemParams = CemParams(), on_round: Callable | None = None) -> CemResult:
+                 params: CemParams = CemParams(), on_round: Callable | None = None,
+                 feasible: Callable[[np.ndarray], np.ndarray] | None = None, draw_batch: int | None = None,
+                 max_draws: int | None = None) -> CemResult:
     """Maximise ``evaluate`` by the cross-entropy method (module docstring).
 
     ``evaluate(candidates (K, d)) -> scores (K,)``; ``mean``/``std`` (d,)
     the initial Gaussian; ``lower``/``upper`` (d,) optional bounds.
     ``on_round(round_index, candidates, scores)`` is called after every
-    round (progress, checkpoints). Returns a :class:`CemResult`.
+    round (progress, checkpoints). ``feasible``, ``draw_batch``, ``max_draws``: the population filled by
+    rejection (:meth:`CemSearch.ask`). Returns a :class:`CemResult`.
     """
     search = CemSearch(mean, std, lower=lower, upper=upper, params=params)
     while not search.done:
         k = search.round
-        X = search.ask()
+        X = search.ask(feasible, draw_batch=draw_batch, max_draws=max_draws)
         search.tell(evaluate(X.copy()))
         if on_round is not None:
             on_round(k, X, search.result.scores[-1])

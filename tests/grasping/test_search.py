@@ -75,3 +75,31 @@ def test_ask_and_tell_is_the_same_search_as_cem_maximize():
         search.ask()
     with pytest.raises(InputError, match="ask"):
         CemSearch([0.0], [1.0], params=p).tell([0.0] * 6)
+
+
+def test_a_feasibility_test_fills_every_round_with_feasible_candidates_and_finds_the_constrained_peak():
+    target = np.array([0.6, 0.0])  # the peak lies in the infeasible half x0 > 0.3: the answer is on its edge
+    evaluate, calls = _noisy_peak(target, noise=0.0)
+    tested = []
+
+    def feasible(X):
+        tested.append(len(X))
+        return X[:, 0] <= 0.3
+
+    p = CemParams(rounds=8, population=10, elite=3, seed=2)
+    result = cem_maximize(evaluate, [0.0, 0.0], [0.4, 0.4], params=p, feasible=feasible, draw_batch=7)
+    every = np.concatenate(result.candidates)
+    assert calls == [10] * 8 and np.all(every[:, 0] <= 0.3)  # full rounds, only feasible candidates
+    assert result.best[0] == pytest.approx(0.3, abs=0.03) and abs(result.best[1]) < 0.05
+    assert set(tested) <= {7} and sum(tested) == sum(d["drawn"] for d in result.draws)
+    assert all(d["infeasible"] < d["drawn"] for d in result.draws) and sum(d["infeasible"] for d in result.draws) > 0
+    # unconstrained, the same search goes past the edge
+    free = cem_maximize(evaluate, [0.0, 0.0], [0.4, 0.4], params=p)
+    assert free.best[0] > 0.45 and free.draws == []
+    # nothing feasible: after max_draws the round keeps the start and the first refused draws
+    none = cem_maximize(evaluate, [0.0, 0.0], [0.4, 0.4], params=CemParams(rounds=1, population=4, elite=1),
+                        feasible=lambda X: np.zeros(len(X), bool), max_draws=9, draw_batch=4)
+    assert none.draws == [{"drawn": 9, "infeasible": 9}] and len(none.candidates[0]) == 4
+    np.testing.assert_array_equal(none.candidates[0][0], [0.0, 0.0])
+    with pytest.raises(InputError, match="booleans"):
+        cem_maximize(evaluate, [0.0, 0.0], [0.4, 0.4], feasible=lambda X: np.ones(len(X) + 1, bool))

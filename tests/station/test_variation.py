@@ -129,21 +129,23 @@ def test_the_search_scores_candidates_by_their_trials_and_keys_a_given_grasp_fil
     assert all("grasp_sha256" not in s and "grasp_file" not in s for s in seen)  # the default: in the fingerprint
 
 
-def test_candidates_the_planner_refuses_on_a_screen_object_score_zero_and_are_never_simulated(monkeypatch,
-                                                                                              capsys):
+def test_candidates_the_planner_refuses_on_a_screen_object_are_drawn_again_and_never_simulated(monkeypatch,
+                                                                                               capsys):
     from types import SimpleNamespace
 
     import catgrasp_drake.runner as runner
     from catgrasp_drake.grasp_search import SCREEN_TASK, search_grasp
     from catgrasp_drake.grasping.search import CemParams
 
-    trials, screens = [], []
+    trials, screened = [], []
+    refuse_all = [False]
 
     def fake_run_tasks(fn, specs, **kw):  # the planner refuses a hand moved up > 5 mm on mug_05 only
         if specs and specs[0]["task"] == SCREEN_TASK:
-            screens.extend(specs)
+            screened.extend((s["instance"], tuple(v)) for s in specs for v in s["variations"])
             return [SimpleNamespace(result={"status": "ok", "plannable": [
-                not (s["instance"] == "mug_05" and v[2] > 0.005) for v in s["variations"]]}) for s in specs]
+                not (s["instance"] == "mug_05" and (v[2] > 0.005 or refuse_all[0])) for v in s["variations"]]})
+                for s in specs]
         trials.extend(specs)
         return [SimpleNamespace(result={"grasp": True, "functional": s["variation"][2] > 0}) for s in specs]
 
@@ -151,14 +153,25 @@ def test_candidates_the_planner_refuses_on_a_screen_object_score_zero_and_are_ne
     result = search_grasp("mug", ["mug_00"], cem=CemParams(rounds=2, population=8, elite=2, seed=3),
                           robustness=Robustness(perturbations=1), cache_dir=None,
                           screen={"mug_05": None, "mug_07": None})
-    assert {s["instance"] for s in screens} == {"mug_05", "mug_07"} and len(screens) == 2 * 2  # per round, object
+    assert {i for i, _ in screened} == {"mug_05", "mug_07"}
+    assert len(screened) == len(set(screened))  # each candidate is screened once on each object
     entries = [e for r in result.rounds for e in r]
-    refused = [e for e in entries if e["screen_refused"]]
-    assert refused and all(e["screen_refused"] == ["mug_05"] and e["variation"]["dz"] > 0.005 for e in refused)
-    assert all(e["score"] == 0.0 and e["trials"] == [] for e in refused)
-    assert all(v["variation"][2] <= 0.005 for v in trials) and result.trials == len(trials) == len(entries) - len(
-        refused)
+    assert len(entries) == 2 * 8 and all(e["screen_refused"] == [] for e in entries)  # full, accepted rounds
+    assert all(v["variation"][2] <= 0.005 for v in trials) and result.trials == len(trials) == 16
+    refused_draws = {v for i, v in screened if i == "mug_05" and v[2] > 0.005}
+    assert [d["infeasible"] for d in result.screened] and sum(d["infeasible"] for d in result.screened) == len(
+        refused_draws) > 0  # the refused draws were drawn again
     assert 0 < result.best["dz"] <= 0.005 and result.best_score == pytest.approx(1.0)
+    # a screen that refuses every draw: after the round's draws (40 x population) the refused candidates are
+    # kept (the start among them), score 0 and are not simulated
+    trials.clear()
+    refuse_all[0] = True
+    result = search_grasp("mug", ["mug_00"], cem=CemParams(rounds=1, population=3, elite=1, seed=4),
+                          robustness=Robustness(perturbations=1), cache_dir=None, screen={"mug_05": None},
+                          screen_max_refused=0)
+    assert result.screened == [{"drawn": 120, "infeasible": 120}]
+    assert [e["screen_refused"] for e in result.rounds[0]] == [["mug_05"]] * 3
+    assert all(e["score"] == 0.0 and e["trials"] == [] for e in result.rounds[0]) and trials == []
     from catgrasp_drake.cli import main
 
     assert main(["search-grasp", "--category", "mug", "--screen", "drill_00"]) == 2
