@@ -20,3 +20,14 @@ def ais_drill_paths():
     if not paths:
         pytest.skip("../shared/datasets/ais_drills not present")
     return paths
+
+
+def pytest_collection_modifyitems(session, config, items):
+    """Files with a ``slow`` test first, every file's tests kept together and in order.
+
+    ``pytest -n auto --dist loadfile`` hands files to its workers in collection order: with the slow
+    (simulating) files last, as the directory order puts the training tests, one worker ran a 3-minute
+    file alone while the other had finished. Slow files first, the fast ones fill the gaps at the end.
+    """
+    slow_files = {item.path for item in items if item.get_closest_marker("slow") is not None}
+    items.sort(key=lambda item: item.path not in slow_files)  # stable: the order within each group is kept

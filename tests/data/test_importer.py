@@ -449,15 +449,16 @@ def test_an_imported_object_is_trained_on_like_an_embedded_instance(imported_dir
     from catgrasp_drake.training import TrainingConfig, train_category
 
     directory, _ = imported_dir
-    config = TrainingConfig(samples_per_instance=2, workers=2, cache_dir=str(tmp_path / "cache"))
-    model = train_category("drill", ["drill_00", "drill_05"], config, objects=[directory])
-    assert model.instances == ("drill_00", "drill_05", "my_drill")
+    # seed 4: drill_00's two samples are tests/reliability/tiny_runs.py's, one of them a functional success
+    config = TrainingConfig(samples_per_instance=2, seed=4, workers=2, cache_dir=str(tmp_path / "cache"))
+    model = train_category("drill", ["drill_00"], config, objects=[directory])
+    assert model.instances == ("drill_00", "my_drill")
     assert model.params["objects"] == {"my_drill": str(directory)}
     mine = model.stats["per_instance"]["my_drill"]
     assert mine["sampled"] == 2 and mine["errors"] == 0  # its trials ran on the imported object's own files
     assert mine["simulated"] + mine["rejected_plan"] + mine["rejected_constraint"] == 2
     # the imported drill is a shape of the space: its latent vector reconstructs it like the others'
-    assert model.space.latent_train.shape[0] == 3
+    assert model.space.latent_train.shape[0] == 2
     path = tmp_path / "drill.npz"
     model.save(path)
     assert CategoryModel.load(path).instances == model.instances

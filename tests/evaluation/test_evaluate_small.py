@@ -1,4 +1,4 @@
-"""A small evaluation: two held-out drills, one view, all four methods; records and Table I agree."""
+"""A small evaluation: one held-out drill, one view, all four methods; records and Table I agree."""
 
 from __future__ import annotations
 
@@ -45,15 +45,16 @@ def report(tmp_path_factory):
     (out / "drill").mkdir()
     # fold 5 trains on every drill but drill_11/12 with the default budget: that is the committed model
     shutil.copy(default_model_path("drill"), out / "drill" / "fold5.npz")
-    config = EvalConfig(category="drill", views=("single",), instances=("drill_11", "drill_12"), workers=2,
+    config = EvalConfig(category="drill", views=("single",), instances=("drill_12",), workers=2,
                         out_dir=str(out))
     return config, evaluate(config)
 
 
+@pytest.mark.slow
 def test_records_cover_every_method_and_instance_once(report):
     config, rep = report
     keys = {(r["instance"], r["view"], r["method"]) for r in rep.records}
-    assert len(rep.records) == 8 and keys == {(i, "single", m) for i in ("drill_11", "drill_12") for m in METHODS}
+    assert len(rep.records) == len(METHODS) and keys == {("drill_12", "single", m) for m in METHODS}
     for r in rep.records:
         assert r["fold"] == 5 and r["seed"] == 0 and r["num_points"] > 300
         assert isinstance(r["grasp"], bool) and isinstance(r["functional"], bool)
@@ -66,14 +67,14 @@ def test_table_counts_equal_the_records_and_reload(report):
     config, rep = report
     for m in METHODS:
         rs = [r for r in rep.records if r["method"] == m]
-        assert rep.table[m]["grasp"]["single"] == [sum(r["grasp"] for r in rs), 2]
-        assert rep.table[m]["functional"]["single"] == [sum(r["functional"] for r in rs), 2]
+        assert rep.table[m]["grasp"]["single"] == [sum(r["grasp"] for r in rs), 1]
+        assert rep.table[m]["functional"]["single"] == [sum(r["functional"] for r in rs), 1]
     reloaded = load_records(f"{config.out_dir}/drill/records.jsonl")
     assert table_one(reloaded) == rep.table
     text = format_table("drill", rep.table)
     assert "paper (RA-L 2018)" in text and all(f"| {m} |" in text for m in METHODS)
     assert set(rep.inference_s) == set(METHODS)
-    assert rep.confidence["trials"] == 2
+    assert rep.confidence["trials"] == 1
 
 
 def test_rerun_reads_the_cache(report):
@@ -82,4 +83,4 @@ def test_rerun_reads_the_cache(report):
     before = sorted(p.name for p in cache.rglob("*.json"))
     again = evaluate(config)
     assert again.records == rep.records
-    assert len(before) == 8 and sorted(p.name for p in cache.rglob("*.json")) == before  # nothing recomputed
+    assert len(before) == len(METHODS) and sorted(p.name for p in cache.rglob("*.json")) == before  # nothing recomputed

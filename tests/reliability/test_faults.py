@@ -1,9 +1,6 @@
-"""Faults: kill -9 and resume, trials that throw inside Drake, dead workers, corrupt files.
+"""Faults: trials that throw inside Drake, dead workers, corrupt files.
 
-The kill tests run the real ``catgrasp`` command line in a subprocess, SIGKILL its whole process
-group (the CLI and its worker processes) once some but not all trials are cached, run the same
-command again, and compare with an uninterrupted run of the same seed: the model array by array,
-bit for bit; the evaluation records field by field except the named timing fields.
+kill -9 and resume: ``test_against_reference_runs.py`` (it shares the uninterrupted reference runs).
 """
 
 from __future__ import annotations
@@ -17,7 +14,7 @@ from pathlib import Path
 import pytest
 
 from catgrasp_drake.errors import ModelFileError
-from catgrasp_drake.runner import TaskCache, run_tasks, task_key
+from catgrasp_drake.runner import run_tasks, task_key
 
 from . import tiny_runs as tiny
 
@@ -29,87 +26,6 @@ def _one_line_naming(message: str, path) -> None:
     assert str(path) in message, message
 
 
-def _check_cache_files(cache: Path) -> dict[str, dict]:
-    """Every cached trial is a whole, checksummed file named by its spec's key; returns key -> record."""
-    out = {}
-    for f in tiny.cached_files(cache):
-        record = json.loads(f.read_text())  # raises on a half-written file
-        assert f.stem == record["key"]
-        assert task_key(record["spec"], record["code_version"]) == record["key"]
-        assert TaskCache(cache, record["code_version"]).get(record["key"]) == record["result"]  # checksum ok
-        out[record["key"]] = record
-    return out
-
-
-# ----------------------------------------------------------------------------- kill -9: training
-@pytest.mark.slow
-def test_kill_minus_9_during_training_then_resume_gives_the_uninterrupted_model(tmp_path):
-    tiny.start_reference_training()  # in the background, one worker: runs beside the interrupted run
-    cache, model = tmp_path / "cache", tmp_path / "model.npz"
-    cmd = tiny.train_command(cache, model, workers=2)
-
-    run = tiny.Run(cmd, tmp_path / "killed")
-    at_kill = tiny.kill_after(run, cache, at_least=1)
-    assert not model.exists()
-    before = _check_cache_files(cache)
-    ids_before = tiny.file_ids(tiny.cached_files(cache))
-    tiny.Run(cmd, tmp_path / "resumed").wait()
-
-    ref_model, ref_cache, _ = tiny.reference_training()
-    tiny.skip_if_code_changed(cache, ref_cache)
-    ref = _check_cache_files(ref_cache)
-    after = _check_cache_files(cache)
-    assert 1 <= at_kill < len(ref), f"killed with {at_kill} of {len(ref)} trials cached: not in the middle"
-    # every trial once: the same specs (keys) as the uninterrupted run, none lost, none extra
-    assert set(after) == set(ref) and set(before) <= set(after)
-    # the trials finished before the kill were read back, not recomputed (an atomic rewrite changes the inode)
-    assert {k: v for k, v in tiny.file_ids(tiny.cached_files(cache)).items() if k in ids_before} == ids_before
-    # identical outcomes, trial by trial (wall-clock timings aside)
-    for k in ref:
-        a = {f: v for f, v in after[k]["result"].items() if f not in tiny.TRIAL_TIMING_FIELDS}
-        b = {f: v for f, v in ref[k]["result"].items() if f not in tiny.TRIAL_TIMING_FIELDS}
-        assert a == b, k
-    # the model: every array bit for bit, every statistic but the wall-clock ones
-    assert tiny.model_differences(model, ref_model) == []
-    _, header = tiny.model_contents(model)
-    stats = header["meta"]["stats"]
-    assert tiny.trial_count(stats) == len(ref)  # trials counted = specs run: none lost, none counted twice
-    assert sum(p["sampled"] for p in stats["per_instance"].values()) == tiny.TRAIN_SAMPLES * len(tiny.TRAIN_INSTANCES)
-
-
-# ----------------------------------------------------------------------------- kill -9: evaluation
-@pytest.mark.slow
-def test_kill_minus_9_during_evaluation_then_resume_gives_the_uninterrupted_records(tmp_path):
-    from catgrasp_drake.evaluation import TIMING_FIELDS, load_records, load_report
-
-    assert set(TIMING_FIELDS) == {"inference_s", "observe_s", "trial_wall_s"}  # the fields allowed to differ
-    tiny.start_reference_evaluation()
-    out = tiny.prepare_eval_dir(tmp_path / "eval")
-    cmd = tiny.eval_command(out, workers=1)  # one worker: trials in sequence, the kill lands between them
-    at_kill = tiny.kill_after(tiny.Run(cmd, tmp_path / "killed"), tiny.eval_cache(out), at_least=1)
-    assert at_kill == 1 and not tiny.records_path(out).exists()
-    ids_before = tiny.file_ids(tiny.cached_files(tiny.eval_cache(out)))
-    tiny.Run(cmd, tmp_path / "resumed").wait()
-
-    ref_out, _ = tiny.reference_evaluation()
-    tiny.skip_if_code_changed(tiny.eval_cache(out), tiny.eval_cache(ref_out))
-    records, ref_records = load_records(tiny.records_path(out)), load_records(tiny.records_path(ref_out))
-    keys = [(r["instance"], r["view"], r["method"]) for r in records]
-    assert sorted(keys) == sorted((tiny.EVAL_INSTANCE, tiny.EVAL_VIEW, m) for m in tiny.EVAL_METHODS)  # each once
-    assert all(r.get("status") == "ok" for r in records)  # real trials, not errors
-
-    def outcome(r):
-        return {k: v for k, v in r.items() if k not in TIMING_FIELDS}
-
-    assert [outcome(r) for r in records] == [outcome(r) for r in ref_records]
-    assert len(tiny.cached_files(tiny.eval_cache(out))) == len(records)
-    assert {k: v for k, v in tiny.file_ids(tiny.cached_files(tiny.eval_cache(out))).items()
-            if k in ids_before} == ids_before
-    report, ref_report = load_report(out / "drill" / "report.json"), load_report(ref_out / "drill" / "report.json")
-    assert report["table"] == ref_report["table"]
-
-
-# ----------------------------------------------------------------------------- trials that throw inside Drake
 def object_trial(spec: dict) -> dict:
     """Worker task: the real grasp trial (``run_grasp_trial``) of the hand-written drill grasp on the object
     in ``spec["model_dir"]``."""

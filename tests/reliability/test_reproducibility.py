@@ -1,4 +1,6 @@
-"""Same seed -> same results, bit for bit, on one machine: data generation, training, an evaluation trial.
+"""Same seed -> same results, bit for bit, on one machine: data generation, model files, task order.
+
+Training and an evaluation trial run twice: ``test_against_reference_runs.py`` (it shares the reference runs).
 
 Wall-clock timings are the only fields allowed to differ, and they are named: a model's
 ``MODEL_TIMING_STATS``, a trial's ``TRIAL_TIMING_FIELDS``, an evaluation record's
@@ -7,7 +9,6 @@ Wall-clock timings are the only fields allowed to differ, and they are named: a 
 
 from __future__ import annotations
 
-import json
 import time
 
 import numpy as np
@@ -16,52 +17,6 @@ import pytest
 from . import tiny_runs as tiny
 
 pytestmark = pytest.mark.filterwarnings("ignore::DeprecationWarning")
-
-
-@pytest.mark.slow
-def test_training_twice_with_the_same_seed_gives_a_bit_identical_model(tmp_path):
-    """A library call with worker processes vs the reference CLI run with one worker (other process, other
-    scheduling, other trial order per process): every array bit for bit, every statistic but timings."""
-    from catgrasp_drake.training import TrainingConfig, train_category
-
-    tiny.start_reference_training()  # in the background, beside this run
-    config = TrainingConfig(samples_per_instance=tiny.TRAIN_SAMPLES, seed=tiny.TRAIN_SEED, workers=2,
-                            cache_dir=str(tmp_path / "cache"))
-    model = train_category(tiny.TRAIN_CATEGORY, list(tiny.TRAIN_INSTANCES), config)
-    model.save(tmp_path / "model.npz")
-    ref_model, ref_cache, _ = tiny.reference_training()
-    tiny.skip_if_code_changed(tmp_path / "cache", ref_cache)
-    assert tiny.model_differences(tmp_path / "model.npz", ref_model) == []
-    assert model.stats["trials_functional"] >= 1  # a model learnt from real successes
-    # trial by trial, too
-    mine = {f.name: json.loads(f.read_text())["result"] for f in tiny.cached_files(tmp_path / "cache")}
-    ref = {f.name: json.loads(f.read_text())["result"] for f in tiny.cached_files(ref_cache)}
-    assert sorted(mine) == sorted(ref)
-
-    def outcome(r):
-        return {k: v for k, v in r.items() if k not in tiny.TRIAL_TIMING_FIELDS}
-
-    assert all(outcome(mine[k]) == outcome(ref[k]) for k in ref)
-
-
-@pytest.mark.slow
-def test_one_evaluation_trial_twice_gives_the_same_record():
-    """The reference evaluation's latent trial (a CLI subprocess) run again in this process: same record,
-    the named timing fields aside."""
-    from catgrasp_drake.evaluation import TIMING_FIELDS, eval_trial_task
-
-    ref_out, _ = tiny.reference_evaluation()
-    cached = [json.loads(f.read_text()) for f in tiny.cached_files(tiny.eval_cache(ref_out))]
-    (ref,) = [c for c in cached if c["spec"]["method"] == "latent"]
-    again = eval_trial_task(ref["spec"])
-    again.setdefault("status", "ok")
-    assert ref["result"]["status"] == "ok" and ref["result"]["sim_s"] > 0  # an executed trial, not an error
-
-    def outcome(r):
-        return {k: v for k, v in r.items() if k not in TIMING_FIELDS}
-
-    assert outcome(again) == outcome(ref["result"])
-    assert set(again) - set(outcome(again)) == set(TIMING_FIELDS)
 
 
 def test_data_generation_is_bit_for_bit(tmp_path):

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from PIL import Image
 
 from catgrasp_drake.film import FILM_VIEWS, film_grasp
@@ -20,12 +21,20 @@ def test_phase_instants_follow_the_timeline_and_add_the_middle_of_the_closing():
     assert dict(phase_instants(tl))["closing"] == (2.8 + 3.9) / 2
 
 
-def test_a_film_shows_every_phase_in_every_view_and_does_not_change_the_trial(tmp_path):
+@pytest.fixture(scope="module")
+def drill_00_trial():
+    """The hand-written grasp on drill_00 (its default scenario), run once without a film:
+    (scenario, motion, result), the reference both film tests compare against."""
     scenario = with_instance(load_scenario("drill_default"), "drill_00")
     motion = load_handwritten_motion("drill", "drill_00")
+    return scenario, motion, run_grasp_trial(scenario, motion)
+
+
+@pytest.mark.slow
+def test_a_film_shows_every_phase_in_every_view_and_does_not_change_the_trial(tmp_path, drill_00_trial):
+    scenario, motion, plain = drill_00_trial
     path = tmp_path / "film.png"
     filmed = film_grasp(scenario, motion, path, size=(64, 48))
-    plain = run_grasp_trial(scenario, motion)
     assert filmed.outcome() == plain.outcome()  # stopping to render changes nothing
     assert filmed.functional_success  # the hand-written drill grasp (tests/station/test_handwritten_physics.py)
     image = np.asarray(Image.open(path))
@@ -52,15 +61,15 @@ def test_a_grasp_that_cannot_be_planned_films_its_start_and_says_why(tmp_path):
     assert np.asarray(Image.open(path)).shape[1] == 64  # one frame: the start
 
 
-def test_a_closeup_follows_the_functional_region_and_does_not_change_the_trial(tmp_path):
+@pytest.mark.slow
+def test_a_closeup_follows_the_functional_region_and_does_not_change_the_trial(tmp_path, drill_00_trial):
     """``closeup=True``: one row per close-up view (front, side, below the trigger), and the same outcome."""
     from catgrasp_drake.film import CLOSEUP_VIEWS
 
-    scenario = with_instance(load_scenario("drill_default"), "drill_00")
-    motion = load_handwritten_motion("drill", "drill_00")
+    scenario, motion, plain = drill_00_trial
     path = tmp_path / "closeup.png"
     filmed = film_grasp(scenario, motion, path, size=(64, 48), closeup=True)
-    assert filmed.outcome() == run_grasp_trial(scenario, motion).outcome()
+    assert filmed.outcome() == plain.outcome()
     image = np.asarray(Image.open(path))
     assert image.shape[1] == (1 + len(phase_instants_of(scenario, motion))) * 64
     assert image.shape[0] > len(CLOSEUP_VIEWS) * 48

@@ -36,6 +36,7 @@ def test_flatten_base_cuts_a_flat_face_at_the_old_lowest_height():
     assert same is m and not done
 
 
+@pytest.mark.slow
 def test_a_domed_scan_falls_over_by_itself_and_stands_once_imported_with_a_flat_base(tmp_path):
     m = _domed_bottle()
     m.apply_translation([0.0, 0.0, -m.bounds[0][2]])

@@ -235,6 +235,7 @@ def test_the_search_runs_on_imported_objects_keyed_by_their_files(tmp_path, monk
     assert f"--objects: {big} is a mug, not a spray_bottle" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_a_search_trial_on_a_stretched_bottle_is_the_hand_written_grasp_on_that_bottle(tmp_path):
     """The task the search runs, on an imported object: the committed bottle 03 at 1.2x has a trigger gap
     (18.8 mm) wider than the index finger's distal phalanx (17.2 mm), and the session-17 spray grasp's index

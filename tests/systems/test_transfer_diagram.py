@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import contextlib
+import io
 import json
 
 import numpy as np
@@ -67,30 +69,35 @@ def test_fast_method_fits_one_shape_in_a_short_refine_and_finds_the_same_pose(dr
     assert np.linalg.norm(fast.X_WO[:3, 3] - X_true[:3, 3]) < 0.03
 
 
-def test_demo_grasps_a_held_out_drill_functionally_from_one_view(tmp_path, capsys):
-    _run_demo(tmp_path, capsys)
-    record = json.loads((tmp_path / "result.json").read_text())
+@pytest.fixture(scope="module")
+def demo_run(tmp_path_factory):
+    """``catgrasp demo`` run once for this module's demo tests: (its printed output, its output directory)."""
+    from catgrasp_drake.cli import main
+
+    out = tmp_path_factory.mktemp("demo")
+    printed = io.StringIO()
+    with contextlib.redirect_stdout(printed):
+        assert main(["demo", "--out", str(out)]) == 0
+    return printed.getvalue(), out
+
+
+@pytest.mark.slow
+def test_demo_grasps_a_held_out_drill_functionally_from_one_view(demo_run):
+    _, out = demo_run
+    record = json.loads((out / "result.json").read_text())
     assert record["grasp_success"] and record["functional_success"], record
 
 
-def _run_demo(tmp_path, capsys) -> dict:
-    from catgrasp_drake.cli import main
-
-    assert main(["demo", "--out", str(tmp_path)]) == 0
-    printed = capsys.readouterr().out
+def test_demo_runs_every_stage_and_writes_its_outputs(demo_run):
+    printed, out = demo_run
     for stage in ("model", "diagram", "perceive", "estimate", "regress", "plan", "execute", "judge", "write"):
         assert f"  {stage} " in printed
-    record = json.loads((tmp_path / "result.json").read_text())
+    record = json.loads((out / "result.json").read_text())
     assert record["instance"] == "drill_12" and record["view"] == "single"
     assert record["plan_status"] == "ok" and record["num_observed_points"] > 500
-    html = (tmp_path / "transfer.html").read_text()
+    html = (out / "transfer.html").read_text()
     assert "<html" in html.lower() and len(html) > 10_000
-    assert (tmp_path / "transfer.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    return record
-
-
-def test_demo_runs_every_stage_and_writes_its_outputs(tmp_path, capsys):
-    record = _run_demo(tmp_path, capsys)
+    assert (out / "transfer.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert 0.3 < record["confidence"] <= 1.0 and record["failure_reason"] != "simulation_error"
 
 

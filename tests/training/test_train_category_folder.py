@@ -11,6 +11,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 import trimesh
 
 from catgrasp_drake.benchmark.report import load_benchmark_records
@@ -26,6 +27,7 @@ from make_example_category import tankard  # noqa: E402
 EXAMPLE = Path(__file__).resolve().parents[2] / "models" / "examples" / "tankards"
 
 
+@pytest.mark.slow
 def test_train_a_new_category_from_a_folder_then_import_a_new_member_with_its_model(tmp_path, monkeypatch, capsys):
     monkeypatch.chdir(tmp_path)  # the objects go to out/categories/tankard/ under the working directory
     model_path = tmp_path / "tankard.npz"

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 import yaml
 
 from catgrasp_drake.category_model import CategoryModel
@@ -12,6 +13,7 @@ from catgrasp_drake.station.handwritten import GRASPS_DIR, load_handwritten_moti
 EXAMPLE_FOLDER = GRASPS_DIR.parents[0] / "examples" / "tankards"
 
 
+@pytest.mark.slow
 def test_train_from_a_grasp_file_keeps_it_as_the_template(tmp_path, capsys):
     spec = yaml.safe_load((GRASPS_DIR / "mug_handwritten.yaml").read_text())
     spec["grasp"]["position"][0] += 0.002  # 2 mm along x: still a mug grasp, but not the committed one

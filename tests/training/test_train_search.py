@@ -53,6 +53,7 @@ def test_auto_regression_with_two_instances_falls_back_to_ridge_and_says_so():
         TrainingConfig(regressor="forest")
 
 
+@pytest.mark.slow
 def test_a_small_search_keeps_scored_grasps_and_the_model_file_carries_them(tmp_path):
     instances = ["drill_00", "drill_05", "drill_07"]
     search = InstanceSearch(cem=CemParams(rounds=1, population=2, elite=1), robustness=Robustness(perturbations=2),

@@ -9,22 +9,26 @@ from catgrasp_drake.category_model import CategoryModel
 from catgrasp_drake.errors import InputError, ModelFileError
 from catgrasp_drake.training import TrainingConfig, train_category
 
-INSTANCES = ["drill_00", "drill_05", "drill_07"]
+INSTANCES = ["drill_00", "drill_05"]
+#: Seed 4 samples three trials on these drills (the fourth sample violates the functional constraint), two of
+#: them functional successes: the cheapest seed of 0..11 (tests/reliability/tiny_runs.py).
+SEED = 4
 
 
 @pytest.fixture(scope="module")
 def small_model(tmp_path_factory):
     cache = tmp_path_factory.mktemp("trial_cache")
-    config = TrainingConfig(samples_per_instance=2, workers=2, cache_dir=str(cache), ridge_alpha=1e-9)
+    config = TrainingConfig(samples_per_instance=2, seed=SEED, workers=2, cache_dir=str(cache), ridge_alpha=1e-9)
     return train_category("drill", INSTANCES, config), config
 
 
+@pytest.mark.slow
 def test_small_training_learns_from_functional_successes(small_model):
     model, _ = small_model
     st = model.stats
-    assert st["instances"] == 3 and st["trials_functional"] >= 1
+    assert st["instances"] == 2 and st["trials_functional"] >= 1
     per = st["per_instance"]
-    assert sum(p["sampled"] for p in per.values()) == 6
+    assert sum(p["sampled"] for p in per.values()) == 4
     for p in per.values():
         assert p["sampled"] == p["rejected_constraint"] + p["rejected_plan"] + p["simulated"] + p["errors"]
 

@@ -33,6 +33,7 @@ def test_stretched_objects_are_written_once_per_family_and_unknown_families_refu
         stretched_objects(tmp_path, "mug", ["mug_00"], ["wide"])
 
 
+@pytest.mark.slow
 def test_train_with_stretched_copies_trains_on_both(tmp_path, capsys):
     out = tmp_path / "mug.npz"
     code = main(["train", "mug", "--instances", "mug_00", "mug_03", "--stretch", "deep", "--samples", "1",
