@@ -449,9 +449,11 @@ def test_an_imported_object_is_trained_on_like_an_embedded_instance(imported_dir
     from catgrasp_drake.training import TrainingConfig, train_category
 
     directory, _ = imported_dir
-    # seed 4: drill_00's two samples are tests/reliability/tiny_runs.py's, one of them a functional success
-    config = TrainingConfig(samples_per_instance=2, seed=4, workers=2, cache_dir=str(tmp_path / "cache"))
-    model = train_category("drill", ["drill_00"], config, objects=[directory])
+    from ..reliability import tiny_runs as tiny
+
+    # the tiny training's seed: drill_00's two samples are its, one of them a functional success
+    config = TrainingConfig(samples_per_instance=2, seed=tiny.TRAIN_SEED, workers=2, cache_dir=str(tmp_path / "cache"))
+    model = train_category("drill", [tiny.TRAIN_INSTANCES[0]], config, objects=[directory])
     assert model.instances == ("drill_00", "my_drill")
     assert model.params["objects"] == {"my_drill": str(directory)}
     mine = model.stats["per_instance"]["my_drill"]

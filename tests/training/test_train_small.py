@@ -9,16 +9,17 @@ from catgrasp_drake.category_model import CategoryModel
 from catgrasp_drake.errors import InputError, ModelFileError
 from catgrasp_drake.training import TrainingConfig, train_category
 
-INSTANCES = ["drill_00", "drill_05"]
-#: Seed 4 samples three trials on these drills (the fourth sample violates the functional constraint), two of
-#: them functional successes: the cheapest seed of 0..11 (tests/reliability/tiny_runs.py).
-SEED = 4
+from ..reliability import tiny_runs as tiny
+
+#: The reliability tests' tiny training: three trials, two of them functional successes (tiny_runs.TRAIN_SEED).
+INSTANCES = list(tiny.TRAIN_INSTANCES)
 
 
 @pytest.fixture(scope="module")
 def small_model(tmp_path_factory):
     cache = tmp_path_factory.mktemp("trial_cache")
-    config = TrainingConfig(samples_per_instance=2, seed=SEED, workers=2, cache_dir=str(cache), ridge_alpha=1e-9)
+    config = TrainingConfig(samples_per_instance=tiny.TRAIN_SAMPLES, seed=tiny.TRAIN_SEED, workers=2,
+                            cache_dir=str(cache), ridge_alpha=1e-9)
     return train_category("drill", INSTANCES, config), config
 
 

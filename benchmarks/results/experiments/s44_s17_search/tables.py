@@ -3,22 +3,27 @@
     python benchmarks/results/experiments/s44_s17_search/tables.py
 
 - the search (``search.json``): start and best robustness, each round's scores, the screen's counts and the
-  functional trials per search bottle (session 43's ``search_summary``), then per candidate its functional trials
-  on the 6 plain and the 6 shrouded search bottles and its shrouded failures;
+  functional trials per search bottle (session 43's ``search_summary``), the best candidate's variation, then per
+  candidate its functional trials on the 6 plain and the 6 shrouded search bottles and its shrouded failures;
 - the check (``check/``), beside the landed grasp's (session 42's records): session 42's ``check_table.py``.
 """
 
 from __future__ import annotations
 
+import importlib.util
 import json
-import sys
 from collections import Counter
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent / "s43_screened_search"))
 
-from tables import search_summary  # noqa: E402  (session 43's)
+
+def _sibling(folder: str, name: str):
+    """Another experiment folder's script ``folder/name.py``, loaded as a module (the folders are not packages)."""
+    spec = importlib.util.spec_from_file_location(f"{folder}_{name}", HERE.parent / folder / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
 
 
 def candidates_by_kind(path: Path) -> None:
@@ -37,14 +42,13 @@ def candidates_by_kind(path: Path) -> None:
 
 
 def main() -> None:
-    search_summary(HERE / "search.json")
+    _sibling("s43_screened_search", "tables").search_summary(HERE / "search.json")
+    print(f"best variation: {json.loads((HERE / 'search.json').read_text())['best']}")
     candidates_by_kind(HERE / "search.json")
-    import subprocess
-
-    table = str(HERE.parent / "s42_shroud_search" / "check_table.py")
+    check_table = _sibling("s42_shroud_search", "check_table")
     print("check: this search's grasp ('searched'), then session 42's records (the landed grasp's)")
     for directory in (HERE / "check", HERE.parent / "s42_shroud_search" / "check"):
-        subprocess.run([sys.executable, table, str(directory)], check=True)
+        check_table.main(str(directory))
 
 
 if __name__ == "__main__":
