@@ -1,4 +1,5 @@
-"""Runs compared with an uninterrupted reference run of the same seed: kill -9 and resume, and the same run twice.
+"""Runs compared with an uninterrupted reference run of the same seed: kill -9 and resume, and the same run twice;
+and what the small training learnt (its model, loaded, predicting and transferring).
 
 The kill tests run the real ``catgrasp`` command line in a subprocess, SIGKILL its whole process
 group (the CLI and its worker processes) once some but not all trials are cached, run the same
@@ -16,8 +17,11 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 
+from catgrasp_drake.category_model import CategoryModel
+from catgrasp_drake.errors import InputError, ModelFileError
 from catgrasp_drake.runner import TaskCache, task_key
 
 from . import tiny_runs as tiny
@@ -105,27 +109,32 @@ def test_kill_minus_9_during_evaluation_then_resume_gives_the_uninterrupted_reco
     assert report["table"] == ref_report["table"]
 
 
-# ----------------------------------------------------------------------------- trials that throw inside Drake
-
-
 # ----------------------------------------------------------------------------- same seed, same results
-@pytest.mark.slow
-def test_training_twice_with_the_same_seed_gives_a_bit_identical_model(tmp_path):
-    """A library call with worker processes vs the reference CLI run with one worker (other process, other
-    scheduling, other trial order per process): every array bit for bit, every statistic but timings."""
+@pytest.fixture(scope="module")
+def library_training(tmp_path_factory):
+    """``(model, cache dir)``: the reference training's seed run again as a library call with worker processes
+    (started beside the reference CLI run, which runs in the background with one worker)."""
     from catgrasp_drake.training import TrainingConfig, train_category
 
-    tiny.start_reference_training()  # in the background, beside this run
+    tiny.start_reference_training()
+    cache = tmp_path_factory.mktemp("library_training") / "cache"
     config = TrainingConfig(samples_per_instance=tiny.TRAIN_SAMPLES, seed=tiny.TRAIN_SEED, workers=2,
-                            cache_dir=str(tmp_path / "cache"))
-    model = train_category(tiny.TRAIN_CATEGORY, list(tiny.TRAIN_INSTANCES), config)
+                            cache_dir=str(cache))
+    return train_category(tiny.TRAIN_CATEGORY, list(tiny.TRAIN_INSTANCES), config), cache
+
+
+@pytest.mark.slow
+def test_training_twice_with_the_same_seed_gives_a_bit_identical_model(library_training, tmp_path):
+    """A library call with worker processes vs the reference CLI run with one worker (other process, other
+    scheduling, other trial order per process): every array bit for bit, every statistic but timings."""
+    model, cache = library_training
     model.save(tmp_path / "model.npz")
     ref_model, ref_cache, _ = tiny.reference_training()
-    tiny.skip_if_code_changed(tmp_path / "cache", ref_cache)
+    tiny.skip_if_code_changed(cache, ref_cache)
     assert tiny.model_differences(tmp_path / "model.npz", ref_model) == []
     assert model.stats["trials_functional"] >= 1  # a model learnt from real successes
     # trial by trial, too
-    mine = {f.name: json.loads(f.read_text())["result"] for f in tiny.cached_files(tmp_path / "cache")}
+    mine = {f.name: json.loads(f.read_text())["result"] for f in tiny.cached_files(cache)}
     ref = {f.name: json.loads(f.read_text())["result"] for f in tiny.cached_files(ref_cache)}
     assert sorted(mine) == sorted(ref)
 
@@ -133,6 +142,68 @@ def test_training_twice_with_the_same_seed_gives_a_bit_identical_model(tmp_path)
         return {k: v for k, v in r.items() if k not in tiny.TRIAL_TIMING_FIELDS}
 
     assert all(outcome(mine[k]) == outcome(ref[k]) for k in ref)
+
+
+# ----------------------------------------------------------------------------- what the small training learnt
+@pytest.mark.slow
+def test_small_training_learns_from_functional_successes(library_training):
+    model, _ = library_training
+    st = model.stats
+    assert st["instances"] == 2 and st["trials_functional"] >= 1
+    per = st["per_instance"]
+    assert sum(p["sampled"] for p in per.values()) == tiny.TRAIN_SAMPLES * len(tiny.TRAIN_INSTANCES)
+    for p in per.values():
+        assert p["sampled"] == p["rejected_constraint"] + p["rejected_plan"] + p["simulated"] + p["errors"]
+
+
+@pytest.mark.slow
+def test_model_round_trips_and_rejects_another_category(library_training, tmp_path):
+    model, _ = library_training
+    path = tmp_path / "drill.npz"
+    model.save(path)
+    loaded = CategoryModel.load(path, category="drill")
+    x = loaded.space.latent_train[0]
+    assert np.allclose(loaded.regressor.predict(x), model.regressor.predict(x))
+    assert loaded.template == model.template
+    with pytest.raises(InputError, match="not 'mug'"):
+        CategoryModel.load(path, category="mug")
+    path.write_bytes(path.read_bytes()[:200])
+    with pytest.raises(ModelFileError):
+        CategoryModel.load(path)
+
+
+@pytest.mark.slow
+def test_regressor_predicts_grasps_within_the_sampled_neighbourhood(library_training):
+    model, _ = library_training
+    grasp = model.template.pose_names.index("grasp")
+    for i, name in enumerate(tiny.TRAIN_INSTANCES):
+        if model.stats["per_instance"][name]["functional"] == 0:
+            continue
+        # every success was sampled within 4 cm / 0.2 rad of the canonical grasp (in canonical space,
+        # after the inverse warp); the regressor must stay in that neighbourhood
+        pred = model.canonical_motion(model.space.latent_train[i]).poses[grasp]
+        ref = model.template.poses[grasp]
+        assert np.linalg.norm(pred[:3, 3] - ref[:3, 3]) < 0.045
+        cos = (np.trace(ref[:3, :3].T @ pred[:3, :3]) - 1) / 2
+        assert np.arccos(np.clip(cos, -1, 1)) < 0.25
+
+
+@pytest.mark.slow
+def test_transfer_with_identity_pose_equals_the_warped_motion(library_training):
+    model, _ = library_training
+    x = model.space.latent_train[1]
+    warped = model.warped_motion(x)
+    moved = model.transfer(x, np.eye(3), np.zeros(3), 1.0, frame="object")
+    assert np.allclose(warped.poses, moved.poses)
+    R = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+    world = model.transfer(x, R, np.array([0.5, 0.0, 0.0]), 1.1)
+    assert np.allclose(world.poses[:, :3, :3], R @ warped.poses[:, :3, :3])
+    # the grasp centre (anchor) is scaled with the object; the hand stays rigid about it
+    a = np.asarray(model.grasp_anchor_H)
+    centre = lambda P: P[:, :3, 3] + P[:, :3, :3] @ a  # noqa: E731
+    assert np.allclose(centre(world.poses), 1.1 * centre(warped.poses) @ R.T + [0.5, 0, 0])
+    dist = np.linalg.norm(world.poses[:, :3, 3] - centre(world.poses), axis=1)
+    assert np.allclose(dist, np.linalg.norm(a))
 
 
 @pytest.mark.slow
