@@ -817,8 +817,8 @@ def build_parser() -> argparse.ArgumentParser:
                    choices=["drill", "spray_bottle", "mug"])
     # (literals: the CLI imports no stack at parse time; a test checks them against BENCHMARK_METHODS, METHODS)
     b.add_argument("--methods", nargs="+", default=["latent", "latent_map", "paper", "nearest", "rigid", "cpd"],
-                   choices=["latent", "latent_map", "latent_fast", "paper", "nearest", "rigid", "cpd",
-                            "true_object"])
+                   choices=["latent", "latent_map", "latent_fast", "latent_plain", "paper", "nearest", "rigid",
+                            "cpd", "true_object"])
     b.add_argument("--views", nargs="+", default=["single"], choices=["single", "active", "two", "three", "full"],
                    help="single (the measure), active (another camera's view while the views so far leave the "
                         "yaw open, at most 3), two / three (always that many), full (4 cameras)")

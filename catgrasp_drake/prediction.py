@@ -28,6 +28,12 @@ grasping motion in W. They differ in the estimator they are paired with
                  measures what the speed costs in success.
 ``true_object``  ``latent``'s grasp, planned around the TRUE object instead of the
                  perceived shape: an ablation row, not a method a robot can run.
+``latent_plain`` ``latent`` with its shape hypotheses weighted by their plain energy (eq. 15 with
+                 every model point a mixture centre, ``core.inference.plain_energy``) instead of
+                 the visibility-aware fit's: an ablation row (session 45). On validation drills it
+                 never ranks a drill turned round first (today's weights: 4 of 144 views); on a
+                 large real drill it prefers the turned fit, so it is not the default
+                 (``benchmarks/results/experiments/s45_yaw_rank``).
 
 Shape posterior (``latent``): the estimator refines the ``hypotheses`` best
 starts of its yaw search (:func:`catgrasp_drake.core.inference.infer_latent_pose`)
@@ -58,7 +64,8 @@ from catgrasp_drake.errors import InputError
 from catgrasp_drake.grasping.descriptor import motion_from_descriptor, motion_functional_point
 from catgrasp_drake.grasping.motion import GraspMotion
 
-METHODS = ("latent", "paper", "rigid", "cpd", "nearest", "true_object", "latent_map", "latent_fast")
+METHODS = ("latent", "paper", "rigid", "cpd", "nearest", "true_object", "latent_map", "latent_fast",
+           "latent_plain")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -89,6 +96,9 @@ POSTERIOR_TEMPERATURE = 15.0
 #: A grasp is well placed on a hypothesis when its functional point is within this of that
 #: hypothesis' grasp's functional point (m): about the trigger's and handle's half-width.
 SUPPORT_RADIUS_M = 0.01
+#: Methods whose shape hypotheses are weighted by their plain energy (every model point a mixture centre;
+#: ``core.inference.plain_energy``) instead of the visibility-aware fit's energy.
+PLAIN_RANKED_METHODS = ("latent_plain",)
 
 
 #: The shorter latent fit of ``latent_fast`` (``infer_latent_pose`` options): chosen on the committed held-out
@@ -105,6 +115,7 @@ ESTIMATORS = {
     "true_object": EstimatorSetup(hypotheses=POSTERIOR_HYPOTHESES),
     "latent_map": EstimatorSetup(),
     "latent_fast": EstimatorSetup(inference=tuple(FAST_ESTIMATE.items())),
+    "latent_plain": EstimatorSetup(hypotheses=POSTERIOR_HYPOTHESES, inference=(("plain_energies", True),)),
 }
 
 #: Direct CPD's settings (outlier weight, iterations, tolerance).
@@ -160,7 +171,7 @@ def _predict_motion(method, model, x, X_WO, scale, observed_W, completed_W):
     X_WO = np.asarray(X_WO, float)
     s = float(scale)
     template = model.template
-    if method in ("latent", "paper", "true_object", "latent_map", "latent_fast"):
+    if method in ("latent", "paper", "true_object", "latent_map", "latent_fast", "latent_plain"):
         return model.transfer(x, X_WO[:3, :3], X_WO[:3, 3], s, frame="world"), ""
     if method == "rigid":
         return _motion(_placed(model, template.poses, X_WO, s), template), ""
@@ -192,13 +203,16 @@ def _predict_motion(method, model, x, X_WO, scale, observed_W, completed_W):
 @dataclasses.dataclass(frozen=True, eq=False)
 class ShapeHypothesis:
     """One fit of the shape posterior, in W: latent ``x`` (q,), pose ``X_WO`` 4x4, ``scale``, the completed
-    shape ``completed_W`` (M, 3) m, and its fit ``energy`` (nats)."""
+    shape ``completed_W`` (M, 3) m, its fit ``energy`` (nats, the visibility-aware fit's) and ``plain_energy``
+    (nats: the same fit with every model point a mixture centre, ``core.inference.plain_energy``; NaN: not
+    known)."""
 
     x: np.ndarray
     X_WO: np.ndarray
     scale: float
     completed_W: np.ndarray
     energy: float
+    plain_energy: float = float("nan")
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -232,17 +246,30 @@ def hypothesis_weights(energies, temperature: float = POSTERIOR_TEMPERATURE) -> 
     return w / w.sum()
 
 
+def ranking_energies(method: str, hypotheses) -> list[float]:
+    """The energies (nats) that weight ``method``'s ``hypotheses`` (:class:`ShapeHypothesis`): their plain
+    energies for :data:`PLAIN_RANKED_METHODS` (InputError if one is missing), else the fits' own."""
+    if check_method(method) not in PLAIN_RANKED_METHODS:
+        return [float(h.energy) for h in hypotheses]
+    plain = [float(h.plain_energy) for h in hypotheses]
+    if not np.all(np.isfinite(plain)):
+        raise InputError(f"the {method} method weights its shape hypotheses by their plain energies: "
+                         "estimate them with plain_energies=True")
+    return plain
+
+
 def grasp_candidates(method: str, model: CategoryModel, hypotheses, *, temperature: float = POSTERIOR_TEMPERATURE,
                      radius: float = SUPPORT_RADIUS_M) -> list[GraspCandidate]:
     """``method``'s grasp for each :class:`ShapeHypothesis` (energy order), ranked by support (module docstring).
 
     Ties in support keep the energy order, so with one hypothesis, or
     hypotheses whose grasps all land apart, the MAP fit's grasp comes first.
+    The weights come from :func:`ranking_energies`.
     """
     hypotheses = list(hypotheses)
     if not hypotheses:
         raise InputError("hypotheses: expected at least one shape hypothesis")
-    w = hypothesis_weights([h.energy for h in hypotheses], temperature)
+    w = hypothesis_weights(ranking_energies(method, hypotheses), temperature)
     motions = [predict_motion(method, model, h.x, h.X_WO, h.scale)[0] for h in hypotheses]
     f = np.array([motion_functional_point(m, model.grasp_anchor_H) for m in motions])
     near = np.linalg.norm(f[:, None] - f[None], axis=2) <= float(radius)

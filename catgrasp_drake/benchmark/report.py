@@ -54,12 +54,13 @@ SPLIT_TITLES = {"test": "held-out generated instances",
 TUNING_SPLITS = ("val", "stress")
 CATEGORIES = ("drill", "spray_bottle", "mug")
 VIEWS = ("single", "active", "two", "three", "full")
-METHODS = ("latent", "latent_map", "latent_fast", "paper", "nearest", "rigid", "cpd", "true_object")
+METHODS = ("latent", "latent_map", "latent_fast", "latent_plain", "paper", "nearest", "rigid", "cpd", "true_object")
 METHOD_LABELS = {"true_object": "true-object planner (ablation)", "latent_map": "latent, MAP fit only (ablation)",
-                 "latent_fast": "latent, fast fit (ablation)"}
+                 "latent_fast": "latent, fast fit (ablation)",
+                 "latent_plain": "latent, hypotheses weighted by the plain energy (ablation)"}
 #: Methods that are not baselines (privileged information, or the method itself with a part switched
 #: off): never the "best baseline" of the summary.
-ABLATIONS = ("true_object", "latent_map", "latent_fast")
+ABLATIONS = ("true_object", "latent_map", "latent_fast", "latent_plain")
 #: Categories pooled in the overall tables (stratified bootstrap by category).
 POOLED = ("drill", "spray_bottle")
 MARKERS = ("summary", "full")

@@ -171,6 +171,44 @@ def test_shape_hypotheses_refine_the_best_starts_and_keep_distinct_fits(space):
             infer_latent_pose(space, T[vis], camera_position=cam, yaw_candidates=8, hypotheses=bad)
 
 
+def test_each_hypothesis_carries_its_plain_energy_the_gmm_with_every_model_point_a_centre(space):
+    """With hypotheses and plain_energies, every fit carries eq. 15's energy with all model points as mixture centres
+    at the best fit's sigma2: differences between fits equal a direct evaluation of that GMM (uniform term w / V, V
+    the observation's box grown by 2 cm per axis) plus the prior; the true pose has the lowest one; without
+    hypotheses, or unasked, it is NaN, and asking changes no fit."""
+    from scipy.special import logsumexp
+
+    w, prior = 0.05, 1.0
+    for xi, yaw_true, az in ((3, 2.0, 120), (5, -2.5, 80)):
+        T, vis, cam, R_true = _observe(space, space.latent_train[xi], yaw_true, np.array([0.02, 0.3, 0.0]), 1.0,
+                                       az_deg=az)
+        O = T[vis]
+        assert len(O) <= 300  # the plain energies see every point
+        many = infer_latent_pose(space, O, camera_position=cam, yaw_candidates=8, hypotheses=3, w=w, prior=prior,
+                                 plain_energies=True)
+        assert len(many.hypotheses) >= 2
+        sigma2 = many.sigma2
+        log_v = np.log(np.prod(O.max(0) - O.min(0) + 0.02))
+
+        def direct(h):
+            d2 = ((O[:, None, :] - h.completed[None]) ** 2).sum(-1)
+            gauss = (logsumexp(-d2 / (2 * sigma2), axis=1) - np.log(len(h.completed))
+                     - 1.5 * np.log(2 * np.pi * sigma2) + np.log(1 - w))
+            return -np.logaddexp(gauss, np.log(w) - log_v).sum() + 0.5 * prior * h.x @ h.x
+
+        plain = np.array([h.plain_energy for h in many.hypotheses])
+        assert np.all(np.isfinite(plain)) and many.plain_energy == plain[0]
+        want = np.array([direct(h) for h in many.hypotheses])
+        np.testing.assert_allclose(plain - plain[0], want - want[0], atol=1e-6)
+        best = int(np.argmin(plain))
+        assert rotation_angle(many.hypotheses[best].R @ R_true.T) < 0.1
+    one = infer_latent_pose(space, O, camera_position=cam, yaw_candidates=8, plain_energies=True)
+    assert np.isnan(one.plain_energy)  # a single fit: nothing to compare
+    unasked = infer_latent_pose(space, O, camera_position=cam, yaw_candidates=8, hypotheses=3)
+    assert all(np.isnan(h.plain_energy) for h in unasked.hypotheses)
+    np.testing.assert_array_equal(unasked.x, many.x)  # asking for them changes no fit
+
+
 def test_the_fit_is_the_same_whether_its_starts_and_hypotheses_run_side_by_side_or_one_after_another(
         space):
     """The yaw search's starts and the refined hypotheses are independent fits run on a thread per core: one

@@ -150,3 +150,23 @@ def test_grasp_candidates_rank_by_the_posterior_mass_that_agrees_with_them(drill
         grasp_candidates("latent", drill, [])
     with pytest.raises(InputError, match="temperature"):
         hypothesis_weights([1.0], temperature=0.0)
+
+
+def test_latent_plain_weights_the_hypotheses_by_their_plain_energy_and_latent_by_the_fit(drill):
+    """The MAP fit by the visibility-aware energy (-100) is 80 nats behind the other hypothesis by the plain energy:
+    ``latent_plain`` puts the other hypothesis' grasp first, ``latent`` the MAP fit's; ``latent_plain`` without a
+    plain energy for every hypothesis is a one-line error."""
+    from catgrasp_drake.prediction import ShapeHypothesis, grasp_candidates, ranking_energies
+
+    q = drill.space.q
+    X0 = _pose()
+    hyps = [ShapeHypothesis(np.zeros(q), X0, 1.0, np.zeros((4, 3)), -100.0, -300.0),
+            ShapeHypothesis(np.zeros(q), _moved(X0, 0.05), 1.0, np.ones((4, 3)), -90.0, -380.0)]
+    assert ranking_energies("latent_plain", hyps) == [-300.0, -380.0]
+    assert ranking_energies("latent", hyps) == [-100.0, -90.0]
+    assert [c.hypothesis for c in grasp_candidates("latent_plain", drill, hyps)] == [1, 0]
+    assert [c.hypothesis for c in grasp_candidates("latent", drill, hyps)] == [0, 1]
+    unknown = [hyps[0], ShapeHypothesis(np.zeros(q), _moved(X0, 0.05), 1.0, np.ones((4, 3)), -90.0)]
+    assert ranking_energies("latent", unknown) == [-100.0, -90.0]
+    with pytest.raises(InputError, match="plain_energies=True"):
+        grasp_candidates("latent_plain", drill, unknown)
