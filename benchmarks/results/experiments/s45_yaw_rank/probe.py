@@ -1,13 +1,14 @@
 """Session 45 probe: rank the latent fit's shape hypotheses by the plain likelihood? (tuning splits, no simulation)
 
     python benchmarks/results/experiments/s45_yaw_rank/probe.py --split val --categories drill \
-        [--placements 12] [--seed 0] --out FILE.jsonl
+        [--placements 12] [--seed 0] [--data-seed N] --out FILE.jsonl
 
 Each object of the split is placed as the benchmark places it (``--seed``, depth noise on), seen once by the
 station camera and fitted as ``latent`` fits (8 yaw starts, visibility-aware, 3 hypotheses). One JSON line per
 view: per hypothesis its yaw error (deg), visibility-aware energy and plain energy (:func:`plain_energy`);
-the hypothesis of the first-ranked grasp under each (``prediction.grasp_candidates``); and the yaw error of the
-paper's plain fit (no camera) on the same view.
+the hypothesis of the first-ranked grasp under each (``prediction.grasp_candidates``) and under the
+``latent_plain`` method's ranking (``first_product``: the fit's own plain energies, ``core.inference.plain_energy``);
+and the yaw error of the paper's plain fit (no camera) on the same view.
 """
 
 from __future__ import annotations
@@ -53,7 +54,10 @@ def plain_energy(completed_W, observed_W, x, w=W_OUTLIER, prior=PRIOR) -> float:
 
 
 def first_hypothesis(model, hyps, energies) -> int:
-    ranked = grasp_candidates("latent", model, [dataclasses.replace(h, energy=e) for h, e in zip(hyps, energies)])
+    """The hypothesis of the first-ranked grasp with the hypotheses weighted by ``energies`` (no plain energies:
+    ``grasp_candidates`` then weights by the given ones, whatever the category)."""
+    ranked = grasp_candidates("latent", model, [dataclasses.replace(h, energy=e, plain_energy=float("nan"))
+                                                for h, e in zip(hyps, energies)])
     return ranked[0].hypothesis
 
 
@@ -63,10 +67,11 @@ def main(argv=None) -> int:
     ap.add_argument("--categories", nargs="+", default=["drill"])
     ap.add_argument("--placements", type=int, default=12)
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--data-seed", type=int, default=None, help="with --split fresh: its data-set seed")
     ap.add_argument("--out", required=True)
     args = ap.parse_args(argv)
     config = BenchmarkConfig(split=args.split, categories=tuple(args.categories), methods=("latent",),
-                             placements=args.placements, seed=args.seed)
+                             placements=args.placements, seed=args.seed, data_seed=args.data_seed)
     specs = trial_specs(config)
     models = {}
     rng = np.random.default_rng(0)
@@ -80,20 +85,26 @@ def main(argv=None) -> int:
             scenario, _, _ = trial_scenario(spec)
             X_WT, X_WO = scenario.table.pose.matrix(), scenario.X_WO()
             p_W, camera_W = observe(scenario)
-            est = estimate_on_table(model.space, p_W, X_WT, camera_W=camera_W, yaw_candidates=8, hypotheses=3)
+            est = estimate_on_table(model.space, p_W, X_WT, camera_W=camera_W, yaw_candidates=8, hypotheses=3,
+                                    plain_energies=True)
             paper = estimate_on_table(model.space, p_W, X_WT, camera_W=None, yaw_candidates=8)
             if not est.ok:
                 continue
             fits = [h for h in (est.hypotheses or (est,)) if np.isfinite(h.energy)]
             O = p_W if len(p_W) <= MAX_POINTS else p_W[rng.choice(len(p_W), MAX_POINTS, replace=False)]
-            hyps = [ShapeHypothesis(h.x, h.X_WO, h.scale, h.completed_W, h.energy) for h in fits]
+            hyps = [ShapeHypothesis(h.x, h.X_WO, h.scale, h.completed_W, h.energy, h.result.plain_energy)
+                    for h in fits]
             vis_e = [h.energy for h in fits]
             plain_e = [plain_energy(h.completed_W, O, h.x) for h in fits]
-            row = {"category": cat, "instance": spec["instance"], "trial": spec["trial"], "n_observed": len(p_W),
+            row = {"split": spec["split"], "category": cat, "instance": spec["instance"], "trial": spec["trial"],
+                   "n_observed": len(p_W),
                    "hypotheses": [{"yaw_error_deg": yaw_error_deg(h.X_WO, X_WO), "energy": e, "plain_energy": pe,
                                    "scale": h.scale} for h, e, pe in zip(fits, vis_e, plain_e)],
                    "first_today": first_hypothesis(model, hyps, vis_e) if len(hyps) > 1 else 0,
                    "first_plain": first_hypothesis(model, hyps, plain_e) if len(hyps) > 1 else 0,
+                   # the latent_plain method's ranking (prediction.grasp_candidates on the fit's own plain energies)
+                   "first_product": grasp_candidates("latent_plain", model, hyps)[0].hypothesis if len(hyps) > 1 else 0,
+                   "product_plain_energy": [h.plain_energy for h in hyps],
                    "paper_yaw_error_deg": yaw_error_deg(paper.X_WO, X_WO) if paper.ok else None,
                    "paper_plain_energy": plain_energy(paper.completed_W, O, paper.x) if paper.ok else None,
                    "seconds": round(time.perf_counter() - t0, 2)}
