@@ -66,6 +66,8 @@ from catgrasp_drake.grasping.motion import GraspMotion
 
 METHODS = ("latent", "paper", "rigid", "cpd", "nearest", "true_object", "latent_map", "latent_fast",
            "latent_plain")
+#: The methods whose grasp is the regressor's R(x) warped by W(x) (they differ only in their estimate).
+REGRESSED_METHODS = ("latent", "paper", "true_object", "latent_map", "latent_fast", "latent_plain")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -171,7 +173,7 @@ def _predict_motion(method, model, x, X_WO, scale, observed_W, completed_W):
     X_WO = np.asarray(X_WO, float)
     s = float(scale)
     template = model.template
-    if method in ("latent", "paper", "true_object", "latent_map", "latent_fast", "latent_plain"):
+    if method in REGRESSED_METHODS:
         return model.transfer(x, X_WO[:3, :3], X_WO[:3, 3], s, frame="world"), ""
     if method == "rigid":
         return _motion(_placed(model, template.poses, X_WO, s), template), ""

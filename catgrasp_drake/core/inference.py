@@ -680,7 +680,8 @@ def plain_energy(prob: _Problem, r: InferenceResult, O: np.ndarray, sigma2: floa
 #: Observed points (at most; evenly subsampled from the refine's) on which :func:`plain_energy` compares the
 #: hypotheses: on a drill model (786 points) its E-step takes 2.2 ms at 300 points and 15 ms at 600 (measured,
 #: float64, this 2-core machine). At 300, on the 122 validation drill views with a right (yaw within 15 deg) and a
-#: turned-round (beyond 45 deg) hypothesis, the turned one's plain energy is 39-192 nats (median) above the right's.
+#: turned-round (beyond 45 deg) hypothesis, the turned one's plain energy is at least 39 nats (median 192) above the
+#: right one's (``python benchmarks/results/experiments/s45_yaw_rank/tables.py``).
 PLAIN_ENERGY_POINTS = 300
 
 #: Two refined hypotheses closer than this in rotation (deg) and translation (m) are one mode.

@@ -16,6 +16,24 @@ HERE = Path(__file__).resolve().parent
 ROUND_DEG, RIGHT_DEG = 45.0, 15.0
 
 
+def _err(view: dict, key: str) -> float:
+    """|yaw error| (deg) of the hypothesis the ranking ``key`` (first_today, first_plain, first_product) puts first."""
+    return abs(view["hypotheses"][view[key]]["yaw_error_deg"])
+
+
+def _changed_line(view: dict, where: str = "") -> str:
+    """One view whose first-ranked hypothesis latent_plain changes: yaw errors, and by how much each energy prefers
+    the hypothesis it ranks first (nats; today's = visibility-aware, latent_plain's = plain at <= 300 points)."""
+    h, a, b = view["hypotheses"], view["first_today"], view["first_product"]
+    vis_gap = h[b]["energy"] - h[a]["energy"]
+    plain = view["product_plain_energy"]
+    return (f"  {where or view['category']} {view['instance']} placement {view['trial']}: "
+            f"yaw error {h[a]['yaw_error_deg']:+.1f} -> {h[b]['yaw_error_deg']:+.1f} deg; "
+            f"today's pick ahead by {vis_gap:.0f} nats (visibility-aware), "
+            f"latent_plain's by {plain[a] - plain[b]:.0f} (plain); scale {h[a]['scale']:.3f} / {h[b]['scale']:.3f}, "
+            f"{view['n_observed']} observed points")
+
+
 def sim_check() -> None:
     """The rule's second step: val drill_00's 12 placements simulated before and after the change (records)."""
     def load(name):
@@ -41,17 +59,18 @@ def heldout() -> None:
     print("| held-out views | views | turned round: today | latent_plain | paper's fit "
           "| changed by latent_plain (instance placement) |")
     print("|---|---:|---:|---:|---:|---|")
+    changed_views = []
     for f in sorted(HERE.glob("heldout_*.jsonl")):
         views = [json.loads(line) for line in f.read_text().splitlines()]
-
-        def err(r, key):
-            return abs(r["hypotheses"][r[key]]["yaw_error_deg"])
-
+        changed_views += [(f.stem.removeprefix("heldout_"), r) for r in views if r["first_today"] != r["first_product"]]
         changed = [f"{r['instance']} {r['trial']}" for r in views if r["first_today"] != r["first_product"]]
         paper = sum(r["paper_yaw_error_deg"] is not None and abs(r["paper_yaw_error_deg"]) > ROUND_DEG for r in views)
-        turned = [sum(err(r, k) > ROUND_DEG for r in views) for k in ("first_today", "first_product")]
+        turned = [sum(_err(r, k) > ROUND_DEG for r in views) for k in ("first_today", "first_product")]
         print(f"| {f.stem.removeprefix('heldout_')} | {len(views)} | {turned[0]} | {turned[1]} | {paper} "
               f"| {', '.join(changed) or '—'} |")
+    print("\nHeld-out views whose first-ranked hypothesis latent_plain changes:")
+    for where, r in changed_views:
+        print(_changed_line(r, where))
 
 
 def main() -> None:
@@ -62,13 +81,9 @@ def main() -> None:
     print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|")
     for cat in sorted({r["category"] for r in rows}):
         views = [r for r in rows if r["category"] == cat]
-
-        def err(r, key):
-            return abs(r["hypotheses"][r[key]]["yaw_error_deg"])
-
         keys = ("first_today", "first_plain", "first_product")
-        turned = {k: sum(err(r, k) > ROUND_DEG for r in views) for k in keys}
-        right = {k: sum(err(r, k) <= RIGHT_DEG for r in views) for k in keys}
+        turned = {k: sum(_err(r, k) > ROUND_DEG for r in views) for k in keys}
+        right = {k: sum(_err(r, k) <= RIGHT_DEG for r in views) for k in keys}
         paper = [abs(r["paper_yaw_error_deg"]) for r in views if r["paper_yaw_error_deg"] is not None]
         oracle = sum(any(abs(h["yaw_error_deg"]) <= RIGHT_DEG for h in r["hypotheses"]) for r in views)
         changed = [r for r in views if r["first_today"] != r["first_plain"]]
@@ -80,12 +95,21 @@ def main() -> None:
               f"| {sum(e <= RIGHT_DEG for e in paper)} | {oracle} | {len(changed)} | {product_changed} "
               f"| {'passes' if passes else 'fails'} |")
     print()
-    print("Validation views whose first-ranked hypothesis latent_plain changes (yaw error today -> latent_plain, deg):")
+    print("Validation views whose first-ranked hypothesis latent_plain changes:")
     for r in rows:
         if r["first_today"] != r["first_product"]:
-            h = r["hypotheses"]
-            print(f"  {r['category']} {r['instance']} placement {r['trial']}: "
-                  f"{h[r['first_today']]['yaw_error_deg']:+.1f} -> {h[r['first_product']]['yaw_error_deg']:+.1f}")
+            print(_changed_line(r))
+    # the margin core.inference.PLAIN_ENERGY_POINTS quotes: drill views with a right and a turned-round hypothesis
+    gaps = []
+    for r in rows:
+        pairs = list(zip(r["hypotheses"], r["product_plain_energy"]))
+        right = [e for h, e in pairs if abs(h["yaw_error_deg"]) <= RIGHT_DEG]
+        turned = [e for h, e in pairs if abs(h["yaw_error_deg"]) > ROUND_DEG]
+        if r["category"] == "drill" and right and turned:
+            gaps.append(min(turned) - min(right))
+    gaps.sort()
+    print(f"\nValidation drill views with a right and a turned-round hypothesis: {len(gaps)}; the turned one's plain "
+          f"energy above the right one's by at least {gaps[0]:.0f} nats, median {gaps[len(gaps) // 2]:.0f}")
 
 
 if __name__ == "__main__":
