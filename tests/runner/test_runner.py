@@ -53,7 +53,8 @@ def worker_pid(spec: dict) -> dict:
 @pytest.mark.skipif(sys.version_info < (3, 11), reason="ProcessPoolExecutor(max_tasks_per_child=) needs 3.11")
 def test_a_worker_process_is_replaced_after_its_share_of_tasks(monkeypatch):
     """Workers are recycled every WORKER_TASKS tasks (Drake's Python systems are never freed, so a long-lived
-    worker only grows): 2 workers, 2 tasks each, 8 tasks -> 4 processes, each running exactly 2 tasks."""
+    worker only grows): 2 workers, at most 2 tasks each, 8 tasks -> at least 4 processes. A process may run
+    fewer: when the queue empties, the last tasks go to whichever live workers take them (CI saw 2,2,2,1,1)."""
     import collections
 
     from catgrasp_drake import runner
@@ -61,7 +62,9 @@ def test_a_worker_process_is_replaced_after_its_share_of_tasks(monkeypatch):
     monkeypatch.setattr(runner, "WORKER_TASKS", 2)
     out = run_tasks(worker_pid, [{"i": i} for i in range(8)], cache_dir=None, code_version="v", workers=2)
     per_process = collections.Counter(o.result["pid"] for o in out)
-    assert sorted(per_process.values()) == [2, 2, 2, 2]
+    assert sum(per_process.values()) == 8
+    assert max(per_process.values()) == 2
+    assert len(per_process) >= 4
     assert os.getpid() not in per_process
 
 
