@@ -50,7 +50,11 @@ cloud) and the rotation error of X_WO (deg). The cloud stage's code and the
 regressor's single-threaded BLAS are the same in both settings (the cloud is
 bit-identical to the earlier code, which took ~20 ms: see the report).
 
-Run:  python benchmarks/bench_transfer.py [--category drill] [--seeds 5] [--settings old new fast free parallel nodrop]
+* ``f64`` (session 46): ``new`` with every E-step's kernel in float64, as before ``kernel32`` (the default now
+  takes the ``exp`` of its float64 exponents in float32: ``core.cpd.estep(kernel32=True)``).
+
+Run:  python benchmarks/bench_transfer.py [--category drill] [--seeds 5]
+      [--settings old new fast free parallel nodrop f64]
 """
 
 from __future__ import annotations
@@ -78,7 +82,8 @@ from catgrasp_drake.transfer import make_transfer_diagram  # noqa: E402
 #: One shape hypothesis, a shorter yaw search and refine: the 50 ms setting (module docstring), the benchmark's
 #: ``latent_fast`` method.
 SETTINGS = {"old": dict(voxel_size=None, **LEGACY_SEARCH), "new": {}, "fast": {"hypotheses": 1} | FAST_ESTIMATE,
-            "free": {"upright": False}, "parallel": {"fit_threads": None}, "nodrop": {"drop_energy": None}}
+            "free": {"upright": False}, "parallel": {"fit_threads": None}, "nodrop": {"drop_energy": None},
+            "f64": {"kernel32": False}}
 NAMES = ("render (sensor)", "cloud", "estimate", "  of which core", "regress", "LATENCY", "share outside core",
          "IK plan")
 

@@ -208,9 +208,12 @@ _EXP_CLAMP32 = -87.0
 _BAD_LOGSUM32 = -60.0
 #: Machine epsilon of float32 (the rounding unit of ``e_step="fast"``'s exponents).
 EPS32 = float(np.finfo(np.float32).eps)
+#: Relative error bound of a kernel value of ``estep(kernel32=True)`` against float64: a float64 exponent
+#: ``|e| <= 87`` rounded to float32 (``87 eps32 / 2``) and float32's ``exp`` (a few ulp).
+KERNEL32_RTOL = 87.0 * EPS32 / 2.0 + 4.0 * EPS32
 
 
-def _estep_block(Ya, Ysc, X, Xa, sigma2, log_c, lo, hi, clamp=True):
+def _estep_block(Ya, Ysc, X, Xa, sigma2, log_c, lo, hi, clamp=True, kernel32=False):
     """E-step for target columns lo:hi. Returns partial [P X | P 1] (M, D+1), Pt1 block, sum log den.
 
     Exponents are clamped at -300 (float32: -87) before ``exp`` so that no subnormal number is
@@ -220,18 +223,27 @@ def _estep_block(Ya, Ysc, X, Xa, sigma2, log_c, lo, hi, clamp=True):
     ``clamp=False`` when no exponent can be below -300 (the clamp is then a no-op).
     With float32 ``Ya``/``Xa`` (``e_step="fast"``) the kernel values, their sums and products are float32
     (clamp at -87, log-domain redo below ``e^-60``; the redo and the accumulation across blocks are float64).
+    ``kernel32`` with float64 ``Ya``/``Xa``: the exponents in float64 (clamped at -87 and redone below ``e^-60``
+    as float32's), their ``exp`` in float32, everything after in float64, so a kernel value's relative error is at
+    most ``87 eps32 / 2`` plus float32 exp's few ulp (:data:`KERNEL32_RTOL`, < 6e-6) whatever ``sigma2``.
     """
     f32 = Ya.dtype == np.float32
     E = Ya @ Xa[lo:hi].T  # exponents -|y - x|^2 / (2 sigma2), (M, nb)
-    if f32:
+    if f32 or kernel32:
         np.maximum(E, _EXP_CLAMP32, out=E)
     elif clamp:
         np.maximum(E, _EXP_CLAMP, out=E)
-    np.exp(E, out=E)
+    if kernel32 and E.dtype != np.float32:
+        # float32 exp of the float64 exponents, stored back as float64: the sums and products below stay float64,
+        # so P1, Pt1 and PX are consistent sums of the same kernel values (Np the same either way to 1e-16: in
+        # float32 they differ by ~1e-6 relative, a shift of ~1e-6 |X| in the M-step's means, 1 mm at 1 km)
+        E[...] = np.exp(E, dtype=np.float32)
+    else:
+        np.exp(E, out=E)
     s = E.sum(axis=0).astype(np.float64, copy=False)
     c = math.exp(min(log_c, 700.0)) if log_c > -700.0 else 0.0  # (a huge given sigma2: no overflow)
     den = s + c
-    bad = s < math.exp(_BAD_LOGSUM32 if f32 else _BAD_LOGSUM)
+    bad = s < math.exp(_BAD_LOGSUM32 if f32 or kernel32 else _BAD_LOGSUM)  # (clamped at -87: redo below e^-60)
     with np.errstate(divide="ignore"):
         logden = np.log(den)
     inv = 1.0 / np.where(bad, 1.0, den)
@@ -291,13 +303,16 @@ def exponent_bound(Ysc: np.ndarray, Xc: np.ndarray, sigma2: float) -> float:
 
 
 def estep(Y_t: np.ndarray, X: np.ndarray, sigma2: float, w: float, *, pool=None,
-          log_uniform: float | None = None, dtype=np.float64) -> EStep:
+          log_uniform: float | None = None, dtype=np.float64, kernel32: bool = False) -> EStep:
     """CPD E-step for transformed source ``Y_t`` (M, D) and targets ``X`` (N, D).
 
     ``log_uniform`` overrides the log of the uniform-term constant ``c`` (the
     default is paper eq. 7's ``(2 pi sigma2)^(D/2) w/(1-w) M/N``). Works in any
     units but is written for normalised coordinates. ``dtype=np.float32`` evaluates
     the kernel in float32 (twice the speed; exponent error ~8 eps32 :func:`exponent_bound`).
+    ``kernel32=True`` (with float64 ``dtype``): the exponents in float64, ``exp`` and what follows it in float32
+    (``exp`` is most of an E-step and float32's is 3x faster here); every kernel value within a relative
+    :data:`KERNEL32_RTOL` of float64's, whatever ``sigma2`` (:func:`exponent_bound` does not enter).
     """
     M, D = Y_t.shape
     N = X.shape[0]
@@ -310,10 +325,11 @@ def estep(Y_t: np.ndarray, X: np.ndarray, sigma2: float, w: float, *, pool=None,
         nb = max(16, min(nb, -(-N // THREADED_BLOCKS)))
     bounds = [(lo, min(N, lo + nb)) for lo in range(0, N, nb)]
     args = (Ya, Ysc, Xc, Xa, sigma2, log_c)
+    kernel32 = bool(kernel32) and Ya.dtype != np.float32
     if pool is not None and len(bounds) > 1:
-        parts = list(pool.map(lambda b: _estep_block(*args, *b, clamp=clamp), bounds))
+        parts = list(pool.map(lambda b: _estep_block(*args, *b, clamp=clamp, kernel32=kernel32), bounds))
     else:
-        parts = [_estep_block(*args, lo, hi, clamp=clamp) for lo, hi in bounds]
+        parts = [_estep_block(*args, lo, hi, clamp=clamp, kernel32=kernel32) for lo, hi in bounds]
     acc = parts[0][0]
     for p in parts[1:]:
         acc = acc + p[0]

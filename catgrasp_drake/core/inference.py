@@ -106,7 +106,8 @@ SEARCH_F32_TOL = 1e-3
 #: The search and refine settings before the speed work of issue 17 (bench_transfer.py and
 #: bench_inference.py compare against them): every start searched to the end, two hidden-point removals
 #: per start, float64 throughout, the visibility recomputed on schedule however little the model moved.
-LEGACY_SEARCH = {"yaw_keep": None, "recenter_visibility": True, "search_float32": False, "visibility_move": 0.0}
+LEGACY_SEARCH = {"yaw_keep": None, "recenter_visibility": True, "search_float32": False, "visibility_move": 0.0,
+                 "kernel32": False}
 #: Shape hypotheses (``hypotheses`` > 1) whose energy, after DROP_AFTER refine iterations, is more than
 #: DROP_ENERGY nats above the lowest are not refined further. Chosen on the committed instances (3 views each,
 #: 3 hypotheses; ``python benchmarks/results/experiments/s34_hypothesis_drop/probe.py``): from iteration 16
@@ -297,7 +298,8 @@ class _Problem:
                 pass
         return self.fit(x, R, t, float(s))
 
-    def run(self, st: _State, O, n_iter, tol, vis_every=1, pool=None, k_start=0, float32=False, vis_move=0.0):
+    def run(self, st: _State, O, n_iter, tol, vis_every=1, pool=None, k_start=0, float32=False, vis_move=0.0,
+            kernel32=False):
         """EM iterations ``k_start .. n_iter - 1`` from state ``st`` on observation subset O.
 
         ``k_start`` > 0 resumes a run stopped after ``k_start`` iterations (its
@@ -305,7 +307,8 @@ class _Problem:
         result is that of one uninterrupted run. ``float32``: the E-step in float32 while
         :data:`SEARCH_F32_TOL` allows. ``vis_move`` (m) > 0: a scheduled
         visibility update is skipped while no model point has moved more than
-        that since the last one.
+        that since the last one. ``kernel32``: every float64 E-step evaluates its kernel in float32
+        (``cpd.estep(kernel32=True)``).
         """
         N = len(O)
         fit = self.fit(st.x, st.R, st.t, st.s)
@@ -333,7 +336,7 @@ class _Problem:
             if float32 and 8.0 * EPS32 * exponent_bound(Tv - ctr, Oc, sigma2) <= SEARCH_F32_TOL:
                 dtype = np.float32
             return estep(Tv, O, sigma2, self.w, log_uniform=self.log_uniform(len(idx), sigma2),
-                         pool=pool if len(idx) * N >= THREADED_ESTEP_MIN else None, dtype=dtype)
+                         pool=pool if len(idx) * N >= THREADED_ESTEP_MIN else None, dtype=dtype, kernel32=kernel32)
 
         def m_step(e, m, sigma2):
             fit = self.mstep(e, idx, m.params, O, sigma2)
@@ -450,6 +453,7 @@ def infer_latent_pose(
     prune_iter: int = 2,
     recenter_visibility: bool = False,
     search_float32: bool = True,
+    kernel32: bool = True,
     visibility_move: float = 2e-3,
     max_points: int = 600,
     visibility_every: int = 4,
@@ -491,7 +495,9 @@ def infer_latent_pose(
     iterations). ``recenter_visibility``: recompute each start's visible part
     after its centroid matching (one more hidden-point removal per start).
     ``search_float32``: the search's E-step in float32 where accurate enough
-    (:data:`SEARCH_F32_TOL`). ``residual_cpd`` adds a
+    (:data:`SEARCH_F32_TOL`). ``kernel32``: every other E-step (the refine's, the search's beyond that bound)
+    computes its exponents in float64 and their ``exp`` in float32 (``cpd.estep(kernel32=True)``: each kernel
+    value within 6e-6 relative of float64's; the E-step 2x faster, most of the fit's time). ``residual_cpd`` adds a
     non-rigid CPD (kernel ``residual_beta``, default the space's beta) from the
     visible completed points to O after the fit and moves the visible points
     only (visible surface detail; applied to the hidden points through its
@@ -546,7 +552,7 @@ def infer_latent_pose(
     prune_iter = count(prune_iter, "prune_iter", 1)
     visibility_move = non_negative(visibility_move, "visibility_move")
     for name, flag in (("recenter_visibility", recenter_visibility), ("search_float32", search_float32),
-                       ("upright", upright)):
+                       ("kernel32", kernel32), ("upright", upright)):
         if not isinstance(flag, (bool, np.bool_)):
             raise InputError(f"{name}: expected True or False, got {flag!r}")
     max_points = count(max_points, "max_points", 3)
@@ -598,14 +604,14 @@ def infer_latent_pose(
             O_sub = _subsample(O, search_points)
             vis_every = max(1, 2 * visibility_every)
             k_prune = search_iter if yaw_keep is None or yaw_keep >= len(yaws) else min(prune_iter, search_iter)
-            f32 = bool(search_float32)
+            f32, k32 = bool(search_float32), bool(kernel32)
             states = list(each(lambda yaw: prob.run(start(yaw), O_sub, k_prune, 0.0, vis_every=vis_every,
-                                                        float32=f32), yaws))
+                                                        float32=f32, kernel32=k32), yaws))
             start_energies = [st.energy for st in states]
             if k_prune < search_iter:  # only the yaw_keep lowest energies go on (stable order: ties keep the first)
                 kept = sorted(np.argsort(start_energies, kind="stable")[:yaw_keep])
                 list(each(lambda i: prob.run(states[i], O_sub, search_iter, 0.0, vis_every=vis_every,
-                                                 k_start=k_prune, float32=f32), kept))
+                                                 k_start=k_prune, float32=f32, kernel32=k32), kept))
                 for i in kept:
                     start_energies[i] = states[i].energy
                 states = [states[i] for i in kept]
@@ -628,7 +634,7 @@ def infer_latent_pose(
             if k_start == 0:
                 st.visible = None
             return prob.run(st, O_fit, n_iter, tol, vis_every=visibility_every, pool=pool, vis_move=visibility_move,
-                            k_start=k_start)
+                            k_start=k_start, kernel32=bool(kernel32))
 
         try:
             list(each(lambda st: refine(st, first_iter), refine_first))

@@ -240,6 +240,34 @@ def test_float32_estep_within_its_stated_bound():
     assert e_step.mode == "dense32"
 
 
+def test_kernel32_estep_within_its_stated_bound_at_any_sigma_and_distance():
+    """exp in float32 on float64 exponents: every kernel value within KERNEL32_RTOL of float64's however small
+    sigma2 is (the float32 E-step's bound grows as 1/sigma2), columns whose every exponent lies below -87 redone
+    exactly, and the sums float64, so P1 and Pt1 add up to the same Np and a cloud 1 km away is no worse."""
+    Y, X = _estep_problem(far=True, n=400)
+    rtol = cpd.KERNEL32_RTOL
+    assert rtol < 6e-6
+    for offset in (0.0, 1000.0):
+        for sigma2 in (0.3**2, 0.05**2, 0.005**2):
+            ref = cpd.estep(Y + offset, X + offset, sigma2, 0.05)
+            got = cpd.estep(Y + offset, X + offset, sigma2, 0.05, kernel32=True)
+            # a posterior is a ratio of kernel sums: within 2 rtol of the reference's, relative
+            assert np.all(np.abs(got.P1 - ref.P1) <= 2 * rtol * ref.P1 + 1e-12)
+            assert np.all(np.abs(got.Pt1 - ref.Pt1) <= 2 * rtol * ref.Pt1 + 1e-12)
+            assert np.all(np.abs(got.PX - ref.PX) <= 2 * rtol * ref.P1[:, None] * np.abs(X + offset).max() + 1e-9)
+            assert abs(got.nll - ref.nll) <= len(X) * rtol
+            assert got.P1.sum() == pytest.approx(got.Pt1.sum(), rel=1e-12)
+            if sigma2 < 0.1**2:  # the far target: every exponent below -87, redone in the log domain in float64
+                assert got.Pt1[-1] == pytest.approx(ref.Pt1[-1], rel=1e-9, abs=1e-300)
+    # where float32's own bound is useless (1/sigma2 large), kernel32 is still within its bound
+    ctr = X.mean(0)
+    assert 8 * cpd.EPS32 * cpd.exponent_bound(Y - ctr, X - ctr, 0.005**2) > 1e-2
+    # with float32 inputs the flag changes nothing
+    a = cpd.estep(Y, X, 0.05**2, 0.05, dtype=np.float32)
+    b = cpd.estep(Y, X, 0.05**2, 0.05, dtype=np.float32, kernel32=True)
+    assert np.array_equal(a.PX, b.PX) and a.nll == b.nll
+
+
 def test_every_e_step_recovers_a_known_deformation_and_agrees():
     rng = np.random.default_rng(0)
     Y = rng.uniform([-0.03, -0.06, 0.0], [0.03, 0.06, 0.18], size=(500, 3))

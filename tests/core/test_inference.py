@@ -133,10 +133,27 @@ def test_legacy_search_settings_still_find_the_yaw(space):
     assert np.abs(f64.completed - new.completed).max() < 1e-4
 
 
+def test_kernel32_fit_is_the_float64_fit(space):
+    """The default fit takes its kernel values' exp in float32 (kernel32): the same yaw, hypotheses and
+    iterations as the all-float64 fit, its shape and pose within 1e-6 (x) and 1e-6 m."""
+    for xi, yaw_true, az in ((3, 2.0, 120), (5, -2.5, 80)):
+        T, vis, cam, _ = _observe(space, space.latent_train[xi], yaw_true, np.array([0.02, 0.3, 0.0]), 1.0, az_deg=az)
+        kw = dict(camera_position=cam, yaw_candidates=8, hypotheses=3, upright=True)
+        got = infer_latent_pose(space, T[vis], **kw)
+        ref = infer_latent_pose(space, T[vis], kernel32=False, **kw)
+        assert got.yaw == ref.yaw and got.iterations == ref.iterations
+        assert len(got.hypotheses) == len(ref.hypotheses)
+        for g, r in zip(got.hypotheses, ref.hypotheses):
+            assert np.abs(g.x - r.x).max() < 1e-6
+            assert np.abs(g.completed - r.completed).max() < 1e-6
+            assert g.energy == pytest.approx(r.energy, abs=1e-3)
+
+
 def test_search_options_are_checked(space):
     T = space.deform(space.latent_train[0])
     for kw in ({"yaw_keep": 0}, {"yaw_keep": 1.5}, {"yaw_keep": "most"}, {"prune_iter": 0}, {"visibility_move": -1.0},
-               {"visibility_move": float("nan")}, {"search_float32": "yes"}, {"recenter_visibility": None}):
+               {"visibility_move": float("nan")}, {"search_float32": "yes"}, {"recenter_visibility": None},
+               {"kernel32": 1}):
         with pytest.raises(InputError):
             infer_latent_pose(space, T, yaw_candidates=4, **kw)
 
