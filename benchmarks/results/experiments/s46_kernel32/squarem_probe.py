@@ -1,17 +1,20 @@
-"""SQUAREM on the latent fit's refine against plain EM, on captured diagram fits (a scratch probe, not the library).
+"""SQUAREM on the latent fit's refine against plain EM, on the diagram's own fits (a scratch probe, not the library).
 
-    python benchmarks/results/experiments/s46_kernel32/capture_fits.py C /tmp/C.pkl
-    python benchmarks/results/experiments/s46_kernel32/squarem_probe.py /tmp/C.pkl em|sq
+    python benchmarks/results/experiments/s46_kernel32/squarem_probe.py CATEGORY em|sq
+
+First runs ``benchmarks/bench_transfer.py --category CATEGORY --seeds 1 --settings new`` and keeps the
+``(args, kwargs)`` of every ``infer_latent_pose`` call its shape estimator makes (2 held-out views); then fits
+each of them again, with the refine as below.
 
 The refine's EM (``core.inference._Problem.run`` with ``tol`` > 0) is replaced by ``core.em.squarem`` over
 theta = (x, rotation vector about the start's rotation, t, log s, log sigma2), the visibility updated on the
 same schedule (every 4 evaluations, not while the model moved < 2 mm). Every hypothesis refined to the end
-(``drop_energy=None``), at most 40 and 80 evaluations. Prints time, final energies, evaluations, convergence,
-the MAP fit's yaw and scale.
+(``drop_energy=None``), at most 40 and 80 evaluations. Prints the median time of 3 runs, final energies,
+evaluations, convergence, the MAP fit's yaw and scale.
 """
 
 import math
-import pickle
+import runpy
 import sys
 import time
 
@@ -19,9 +22,13 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 import catgrasp_drake.core.inference as inference
+import catgrasp_drake.systems.shape_estimator as shape_estimator
 from catgrasp_drake.core.cpd import estep
 from catgrasp_drake.core.em import sigma2_update, squarem
 from catgrasp_drake.core.rotations import rotz
+
+#: Each fit timed this many times (the median is printed).
+REPEATS = 3
 
 
 def refine_by_squarem(prob, st, O, n_iter, tol, vis_every=1, vis_move=0.0, kernel32=False, **_):
@@ -61,8 +68,28 @@ def refine_by_squarem(prob, st, O, n_iter, tol, vis_every=1, vis_move=0.0, kerne
     return st
 
 
+def diagram_fits(category):
+    """The ``(args, kwargs)`` of the shape estimator's fits in ``bench_transfer.py`` (one placement per view)."""
+    calls = []
+
+    def recording(*args, **kwargs):
+        calls.append((args, kwargs))
+        return inference.infer_latent_pose(*args, **kwargs)
+
+    shape_estimator.infer_latent_pose, argv = recording, sys.argv
+    sys.argv = ["bench_transfer.py", "--category", category, "--seeds", "1", "--settings", "new"]
+    try:
+        runpy.run_path("benchmarks/bench_transfer.py", run_name="__main__")
+    except SystemExit:
+        pass
+    finally:
+        shape_estimator.infer_latent_pose, sys.argv = inference.infer_latent_pose, argv
+    return calls
+
+
 def main():
-    calls, mode = pickle.load(open(sys.argv[1], "rb")), sys.argv[2]
+    category, mode = sys.argv[1], sys.argv[2]
+    calls = diagram_fits(category)
     plain = inference._Problem.run
 
     def run(self, st, O, n_iter, tol, **kw):
@@ -73,10 +100,13 @@ def main():
     inference._Problem.run = run
     for args, kwargs in calls:
         for max_iter in (40, 80):
-            t = time.perf_counter()
-            r = inference.infer_latent_pose(*args, **{**kwargs, "drop_energy": None, "max_iter": max_iter})
-            dt = time.perf_counter() - t
-            print(mode, max_iter, f"{1000 * dt:.0f} ms", "energies", [round(h.energy, 2) for h in r.hypotheses],
+            times = []
+            for _ in range(REPEATS):
+                t = time.perf_counter()
+                r = inference.infer_latent_pose(*args, **{**kwargs, "drop_energy": None, "max_iter": max_iter})
+                times.append(time.perf_counter() - t)
+            print(mode, max_iter, f"{1000 * float(np.median(times)):.0f} ms",
+                  "energies", [round(h.energy, 2) for h in r.hypotheses],
                   "evaluations", [h.iterations for h in r.hypotheses], "converged", [h.converged for h in r.hypotheses],
                   "yaw", round(math.degrees(r.yaw), 1), "scale", round(r.s, 4))
 
