@@ -310,8 +310,8 @@ def estep(Y_t: np.ndarray, X: np.ndarray, sigma2: float, w: float, *, pool=None,
     default is paper eq. 7's ``(2 pi sigma2)^(D/2) w/(1-w) M/N``). Works in any
     units but is written for normalised coordinates. ``dtype=np.float32`` evaluates
     the kernel in float32 (twice the speed; exponent error ~8 eps32 :func:`exponent_bound`).
-    ``kernel32=True`` (with float64 ``dtype``): the exponents in float64, ``exp`` and what follows it in float32
-    (``exp`` is most of an E-step and float32's is 3x faster here); every kernel value within a relative
+    ``kernel32=True`` (with float64 ``dtype``): the exponents in float64, their ``exp`` in float32, the sums in
+    float64 (``exp`` is most of an E-step and float32's is 3x faster here); every kernel value within a relative
     :data:`KERNEL32_RTOL` of float64's, whatever ``sigma2`` (:func:`exponent_bound` does not enter).
     """
     M, D = Y_t.shape
