@@ -503,7 +503,7 @@ def _cmd_import_object(args) -> int:
         print("  region     none")
     print(f"  mass       {imported.mass_kg:.3f} kg ({rec['mass_source']}); collision mesh: {rec['collision_mesh']}")
     margin_mm = 1000 * rec["support_margin_m"]
-    tips = (f"; it tips at {rec['tipping_angle_deg']:.1f} deg (below {MIN_TIPPING_ANGLE_DEG:.0f}: it falls over by "
+    tips = (f"; it tips at {rec['tipping_angle_deg']:.1f} deg (below {MIN_TIPPING_ANGLE_DEG:g}: it falls over by "
             "itself in simulation)") if margin_mm > 0 else ""
     print(f"  stands     {'yes' if rec['stands'] else 'NO'}: its centre of mass is {abs(margin_mm):.0f} mm "
           f"{'inside' if margin_mm > 0 else 'outside'} its base{tips}")

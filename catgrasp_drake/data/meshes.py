@@ -147,12 +147,13 @@ def support_margin(mesh: trimesh.Trimesh, center_of_mass, band_m: float = SUPPOR
 
 #: An object stands on its own (a generated draw is kept, an import is called standing) when its centre of
 #: mass is at least this angle inside the edge of its base, seen from the edge (``tipping_angle_deg``). In
-#: simulation (session 37, ``tests/station/test_generated_stand.py``) a drill of 2.5 deg (the validation
-#: split's first draw of drill_09) falls over by itself within a second, nothing touching it, while the
-#: committed drills, the lowest 4.6 deg (drill_11), stand (leaning < 1 deg into the compliant table). Of the
-#: 270 instances of the committed, test, validation and three fresh seeds only that one draw was below it;
-#: the real objects the benchmark imports (8 AIS drills, 3 YCB scans) tip at 7.0 deg or more.
-MIN_TIPPING_ANGLE_DEG = 4.0
+#: simulation (``tests/station/test_generated_stand.py``) a drill of 2.5 deg (the validation split's first draw
+#: of drill_09, session 37) and one of 4.05 deg (the fourth fresh seed's first draw of drill_00, session 46: it
+#: fell in all 9 of its benchmark trials before the hand closed) fall over by themselves, nothing touching them,
+#: while the committed drills, the lowest 4.55 deg (drill_11), stand (leaning < 1 deg into the compliant table).
+#: Of the 318 instances of the committed, test, validation and four fresh seeds only those two draws were below
+#: it; the real objects the benchmark imports (8 AIS drills, 3 YCB scans) tip at 7.0 deg or more.
+MIN_TIPPING_ANGLE_DEG = 4.5
 
 
 def tipping_angle_deg(mesh: trimesh.Trimesh, center_of_mass=None) -> float:
