@@ -233,7 +233,7 @@ def _estep_block(Ya, Ysc, X, Xa, sigma2, log_c, lo, hi, clamp=True, kernel32=Fal
         np.maximum(E, _EXP_CLAMP32, out=E)
     elif clamp:
         np.maximum(E, _EXP_CLAMP, out=E)
-    if kernel32 and E.dtype != np.float32:
+    if kernel32:  # (estep passes it only with float64 exponents)
         # float32 exp of the float64 exponents, stored back as float64: the sums and products below stay float64,
         # so P1, Pt1 and PX are consistent sums of the same kernel values (Np the same either way to 1e-16: in
         # float32 they differ by ~1e-6 relative, a shift of ~1e-6 |X| in the M-step's means, 1 mm at 1 km)

@@ -3,19 +3,17 @@
     python compare.py BEFORE.jsonl AFTER.jsonl
 """
 
-import json
 import sys
+
+from catgrasp_drake.benchmark.report import load_benchmark_records
+from catgrasp_drake.benchmark.runner import TRIAL_KEYS
 
 MEASURED = ("scale", "pose_error_mm", "yaw_error_deg", "rise_m", "tilt_deg")
 
 
 def load(path):
-    out = {}
-    for line in open(path):
-        r = json.loads(line)
-        if "method" in r:  # (the header line has none)
-            out[(r["category"], r["instance"], r["method"], r["view"], r["trial"])] = r
-    return out
+    """The file's records by their trial (``TRIAL_KEYS``: split, category, instance, trial, view, method, ...)."""
+    return {tuple(r.get(k) for k in TRIAL_KEYS): r for r in load_benchmark_records(path)}
 
 
 def main():
@@ -27,8 +25,8 @@ def main():
         eq = all(ra[f] == rb[f] for f in ("grasp", "functional", "reason"))
         same += eq
         moved = {f: (ra[f], rb[f]) for f in MEASURED if ra.get(f) != rb.get(f)}
-        print(k[0], k[1], "same" if eq else "CHANGED", ra["functional"], rb["functional"], ra["reason"], rb["reason"],
-              moved or "")
+        print(ra["category"], ra["instance"], "same" if eq else "CHANGED", ra["functional"], rb["functional"],
+              ra["reason"], rb["reason"], moved or "")
     print(f"{same}/{len(keys)} outcomes (grasp, functional, reason) agree; only in one file: {len(set(a) ^ set(b))}")
     for name, d in (("first", a), ("second", b)):
         print(name, "functional", sum(r["functional"] for r in d.values()), "of", len(d))
