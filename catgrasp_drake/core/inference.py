@@ -690,6 +690,24 @@ def plain_energy(prob: _Problem, r: InferenceResult, O: np.ndarray, sigma2: floa
 #: right one's (``python benchmarks/results/experiments/s45_yaw_rank/tables.py``).
 PLAIN_ENERGY_POINTS = 300
 
+#: An observed point farther than this (m) from every point of a fit's completed shape is *uncovered*
+#: (:func:`uncovered_points`): about three sigma of a fitted mug or drill (sigma 2.4-3.1 mm).
+UNCOVERED_RADIUS_M = 0.008
+
+
+def uncovered_points(completed, observed, radius: float = UNCOVERED_RADIUS_M) -> int:
+    """How many of the ``observed`` points (N, 3) lie farther than ``radius`` (m) from every point of the
+    ``completed`` shape (M, 3), visible or hidden: the part of a view a fit leaves unexplained. A drill fitted
+    turned round leaves its handle's and chuck's points uncovered where the right fit leaves few
+    (validation drills, ``benchmarks/results/experiments/s47_coverage``)."""
+    C = as_points(completed, "completed", min_points=1)
+    P = as_points(observed, "observed", min_points=0)
+    if len(P) == 0:
+        return 0
+    d, _ = cKDTree(C).query(P, distance_upper_bound=positive(radius, "radius"))
+    return int(np.isinf(d).sum())
+
+
 #: Two refined hypotheses closer than this in rotation (deg) and translation (m) are one mode.
 SAME_MODE_DEG = 5.0
 SAME_MODE_M = 5e-3

@@ -117,7 +117,8 @@ class GraspPredictor(LeafSystem):
         fits = [h for h in estimate.hypotheses if np.isfinite(h.energy)] if estimate is not None and estimate.ok else []
         if len(fits) > 1 and self._method != "cpd":
             hypotheses = [ShapeHypothesis(h.x, h.X_WO, h.scale, h.completed_W, h.energy,
-                                          h.result.plain_energy if h.result is not None else float("nan"))
+                                          h.result.plain_energy if h.result is not None else float("nan"),
+                                          max(h.uncovered, 0))
                           for h in fits]
             value.set_value(tuple(grasp_candidates(self._method, self._model, hypotheses)))
             return

@@ -33,7 +33,13 @@ from pydrake.perception import PointCloud
 from pydrake.systems.framework import EventStatus, LeafSystem
 from scipy.spatial import cKDTree
 
-from catgrasp_drake.core.inference import InferenceResult, camera_positions, infer_latent_pose, model_spacing
+from catgrasp_drake.core.inference import (
+    InferenceResult,
+    camera_positions,
+    infer_latent_pose,
+    model_spacing,
+    uncovered_points,
+)
 from catgrasp_drake.core.shape_space import ShapeSpace
 from catgrasp_drake.core.validation import non_negative, real_array, vector3
 from catgrasp_drake.errors import CatgraspError, InputError
@@ -98,6 +104,9 @@ class ShapeEstimate:
     table frame T; ``timing`` seconds. ``hypotheses``: with the estimator's
     ``hypotheses=k`` > 1, the distinct fits in W, lowest energy first (this
     estimate is the first, with no ``hypotheses`` of its own); else empty.
+    ``uncovered``: the observed points (every finite point of the cloud, not
+    only those the fit saw) farther than ``core.inference.UNCOVERED_RADIUS_M``
+    from every point of ``completed_W`` (-1: no estimate).
     """
 
     ok: bool
@@ -113,6 +122,7 @@ class ShapeEstimate:
     timing: dict = field(default_factory=dict)
     hypotheses: tuple = ()
     views: int = 1  # camera views fitted: more than 1 when further views were merged in (``view_policy``)
+    uncovered: int = -1
 
     # Contexts deep-copy abstract state; an estimate is never mutated (and holds the shape space).
     def __deepcopy__(self, memo):
@@ -192,7 +202,8 @@ def estimate_on_table(space: ShapeSpace, p_W: np.ndarray, X_WT: np.ndarray, *, c
         X_TO[:3, :3], X_TO[:3, 3] = r.R, r.t
         completed_W = r.completed @ R_WT.T + p_WT
         return ShapeEstimate(True, "ok", r.x.copy(), X_WT @ X_TO, float(r.s), completed_W, float(r.energy),
-                             float(r.confidence), p_W, r, dict(r.timing))
+                             float(r.confidence), p_W, r, dict(r.timing),
+                             uncovered=uncovered_points(completed_W, p_W))
 
     best = in_world(r)
     if r.hypotheses:

@@ -334,3 +334,29 @@ def test_upright_fit_keeps_z_up_and_finds_the_yaw(space):
     assert np.linalg.norm(r.completed - T, axis=1).mean() < 4e-3
     with pytest.raises(InputError, match="upright"):
         infer_latent_pose(space, T[vis], upright="yes")
+
+
+
+def test_uncovered_points_counts_the_observed_points_no_part_of_the_completed_shape_explains(space):
+    """A partial view of a known instance plus a clump of 25 points 50 cm above it (what a fit that puts a handle
+    out of sight leaves unexplained): the fit's completed shape leaves exactly the clump uncovered, the count equal to
+    a direct one of observed points farther than UNCOVERED_RADIUS_M from every completed point; bad input is a
+    one-line error."""
+    from scipy.spatial.distance import cdist
+
+    from catgrasp_drake.core.inference import UNCOVERED_RADIUS_M, uncovered_points
+
+    T, vis, cam, _ = _observe(space, space.latent_train[2], 0.3, np.array([0.1, 0.3, 0.0]), 1.0)
+    O = T[vis]
+    r = infer_latent_pose(space, O, camera_position=cam, yaw_candidates=8)
+    assert uncovered_points(r.completed, O) == 0
+    far = O.mean(0) + np.array([0.0, 0.0, 0.5]) + np.random.default_rng(1).normal(scale=2e-3, size=(25, 3))
+    both = np.vstack([O, far])
+    direct = int((cdist(both, r.completed).min(1) > UNCOVERED_RADIUS_M).sum())
+    assert uncovered_points(r.completed, both) == direct == 25
+    assert uncovered_points(r.completed, both, radius=1.0) == 0
+    assert uncovered_points(r.completed, np.zeros((0, 3))) == 0
+    with pytest.raises(InputError, match="completed"):
+        uncovered_points(np.full((3, 3), np.nan), O)
+    with pytest.raises(InputError, match="radius"):
+        uncovered_points(r.completed, O, radius=-1.0)

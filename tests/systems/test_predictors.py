@@ -170,3 +170,23 @@ def test_latent_plain_weights_the_hypotheses_by_their_plain_energy_and_latent_by
     assert ranking_energies("latent", unknown) == [-100.0, -90.0]
     with pytest.raises(InputError, match="plain_energies=True"):
         grasp_candidates("latent_plain", drill, unknown)
+
+
+def test_drill_hypotheses_are_ranked_by_energy_plus_their_uncovered_observed_points(drill):
+    """On drills (``COVERAGE_RANKED_CATEGORIES``) a hypothesis pays UNCOVERED_NATS per observed point its completed
+    shape leaves uncovered: the MAP fit (-100 nats) leaving 40 points is ranked behind one at -90 leaving 2; for
+    another category, or ``latent_plain``, the same hypotheses keep their energies."""
+    import dataclasses
+
+    from catgrasp_drake.prediction import UNCOVERED_NATS, ShapeHypothesis, grasp_candidates, ranking_energies
+
+    q = drill.space.q
+    X0 = _pose()
+    hyps = [ShapeHypothesis(np.zeros(q), X0, 1.0, np.zeros((4, 3)), -100.0, -300.0, 40),
+            ShapeHypothesis(np.zeros(q), _moved(X0, 0.05), 1.0, np.ones((4, 3)), -90.0, -380.0, 2)]
+    assert ranking_energies("latent", hyps, "drill") == [-100.0 + 40 * UNCOVERED_NATS, -90.0 + 2 * UNCOVERED_NATS]
+    assert ranking_energies("latent", hyps, "mug") == ranking_energies("latent", hyps) == [-100.0, -90.0]
+    assert ranking_energies("latent_plain", hyps, "drill") == [-300.0, -380.0]
+    assert [c.hypothesis for c in grasp_candidates("latent", drill, hyps)] == [1, 0]
+    mug_like = dataclasses.replace(drill, category="mug")
+    assert [c.hypothesis for c in grasp_candidates("latent", mug_like, hyps)] == [0, 1]

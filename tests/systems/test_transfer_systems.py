@@ -9,6 +9,7 @@ from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder
 
 from catgrasp_drake.category_model import CategoryModel
+from catgrasp_drake.core.inference import uncovered_points
 from catgrasp_drake.core.regression import fit_ridge
 from catgrasp_drake.core.rotations import rotation_angle, rotz
 from catgrasp_drake.core.shape_space import build_shape_space
@@ -198,6 +199,11 @@ def test_fit_voxel_grid_is_matched_to_the_model_and_selectable(space):
     np.testing.assert_allclose(auto.x, given.x, atol=1e-7)
     assert auto.result.diagnostics["n_observed"] < len(dense)
     assert len(auto.observed_W) == len(dense)  # the estimate keeps the cloud as given
+    # its uncovered count is taken on every point of the cloud as given, not on the voxelised one the fit saw
+    stray = dense.mean(0) + np.array([0.0, 0.0, 0.4]) + np.random.default_rng(3).normal(scale=1e-3, size=(30, 3))
+    with_stray = estimate_on_table(space, np.vstack([dense, stray]), X_WT, camera_W=cam_W, yaw_candidates=[0.3])
+    assert with_stray.uncovered == uncovered_points(with_stray.completed_W, np.vstack([dense, stray])) >= 30
+    assert auto.uncovered == uncovered_points(auto.completed_W, dense)
     # the old settings stay selectable
     old = LatentShapeEstimator(space, X_WT, yaw_candidates=[0.3], voxel_size=None, **LEGACY_SEARCH)
     ctx = _estimator_context(old, dense, cam_W)
