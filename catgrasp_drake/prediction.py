@@ -216,7 +216,7 @@ class ShapeHypothesis:
     shape ``completed_W`` (M, 3) m, its fit ``energy`` (nats, the visibility-aware fit's) and ``plain_energy``
     (nats: the same fit with every model point a mixture centre, ``core.inference.plain_energy``; NaN: not
     known) and ``uncovered``: the observed points farther than ``core.inference.UNCOVERED_RADIUS_M`` from every
-    point of ``completed_W`` (``InferenceResult.uncovered``)."""
+    point of ``completed_W`` (``systems.shape_estimator.ShapeEstimate.uncovered``)."""
 
     x: np.ndarray
     X_WO: np.ndarray

@@ -336,7 +336,6 @@ def test_upright_fit_keeps_z_up_and_finds_the_yaw(space):
         infer_latent_pose(space, T[vis], upright="yes")
 
 
-
 def test_uncovered_points_counts_the_observed_points_no_part_of_the_completed_shape_explains(space):
     """A partial view of a known instance plus a clump of 25 points 50 cm above it (what a fit that puts a handle
     out of sight leaves unexplained): the fit's completed shape leaves exactly the clump uncovered, the count equal to
