@@ -20,19 +20,23 @@ import math
 import sys
 from pathlib import Path
 
-from scipy.spatial import cKDTree
-
 sys.path.insert(0, str(Path(__file__).resolve().parents[4]))
 
 from catgrasp_drake.benchmark.runner import BenchmarkConfig, trial_scenario, trial_specs, yaw_error_deg  # noqa: E402
 from catgrasp_drake.category_model import CategoryModel  # noqa: E402
-from catgrasp_drake.prediction import POSTERIOR_HYPOTHESES, ShapeHypothesis, grasp_candidates  # noqa: E402
+from catgrasp_drake.core.inference import UNCOVERED_RADIUS_M, uncovered_points  # noqa: E402
+from catgrasp_drake.prediction import (  # noqa: E402
+    POSTERIOR_HYPOTHESES,
+    UNCOVERED_NATS,
+    ShapeHypothesis,
+    grasp_candidates,
+)
 from catgrasp_drake.systems.shape_estimator import estimate_on_table  # noqa: E402
 from catgrasp_drake.transfer import observe  # noqa: E402
 
-RADII_M = (0.005, 0.008, 0.012)
-#: The ranking under test, fixed before the probe (README): E + LAMBDA * (observed points beyond R_M of the shape).
-LAMBDA, R_M = 5.0, 0.008
+#: Radii (m) of the uncovered counts written; the ranking under test (README) is the product's:
+#: E + UNCOVERED_NATS (5) x the count at UNCOVERED_RADIUS_M (8 mm), for every category here.
+RADII_M = (0.005, UNCOVERED_RADIUS_M, 0.012)
 
 
 def first_hypothesis(model, hyps, energies) -> int:
@@ -71,11 +75,11 @@ def main(argv=None) -> int:
             hyps = [ShapeHypothesis(h.x, h.X_WO, h.scale, h.completed_W, h.energy) for h in fits]
             rows, cover = [], []
             for h in fits:
-                d, _ = cKDTree(h.completed_W).query(p_W)
-                cover.append(float(h.energy) + LAMBDA * int((d > R_M).sum()))
+                uncovered = [uncovered_points(h.completed_W, p_W, r) for r in RADII_M]
+                cover.append(float(h.energy) + UNCOVERED_NATS * uncovered[1])
                 rows.append({"yaw_error_deg": round(yaw_error_deg(h.X_WO, X_WO), 3), "energy": round(h.energy, 3),
                              "n_visible": int(h.result.visible.sum()), "sigma2": float(h.result.sigma2),
-                             "uncovered": [int((d > r).sum()) for r in RADII_M]})
+                             "uncovered": uncovered})
             line = {"category": cat, "instance": spec["instance"], "trial": spec["trial"],
                     "n_observed": len(p_W),
                     # the functional direction (+y of O) against the direction to the camera, about z: 0 = facing it
