@@ -41,11 +41,18 @@ SUPPORT_RADIUS_M = 0.008
 SUPPORT_NATS = 5.0
 
 
-def region_model_points(model: CategoryModel) -> np.ndarray:
-    """Indices of the canonical shape's points inside the canonical instance's annotated functional region."""
+def region_model_points(model: CategoryModel, protrude: float = 0.0) -> np.ndarray:
+    """Indices of the canonical shape's points inside the canonical instance's annotated functional region;
+    with ``protrude`` > 0 (m), only those farther than that from every canonical point outside the region (the
+    part of the region that sticks out of the rest of the shape: a mug's handle without the wall behind it)."""
     region = load_constraint(model.category).region
     box = load_annotations(model.category, model.canonical_instance)["regions"][region]
-    return np.flatnonzero(points_in_region(model.space.canonical, np.eye(4), box, 0.0))
+    C = model.space.canonical
+    inside = points_in_region(C, np.eye(4), box, 0.0)
+    idx = np.flatnonzero(inside)
+    if protrude > 0:
+        idx = idx[cKDTree(C[~inside]).query(C[idx])[0] > protrude]
+    return idx
 
 
 def region_support(completed_W: np.ndarray, region_idx: np.ndarray, p_W: np.ndarray, radius: float) -> int:
@@ -67,6 +74,8 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--data-seed", type=int, default=None)
     ap.add_argument("--data", default="out/benchmark/data")
+    ap.add_argument("--protrude", type=float, default=0.0,
+                    help="keep only region points farther than this (m) from the rest of the shape (README: try 2)")
     ap.add_argument("--out", required=True)
     args = ap.parse_args(argv)
     config = BenchmarkConfig(split=args.split, categories=tuple(args.categories), methods=("latent",),
@@ -78,7 +87,7 @@ def main(argv=None) -> int:
             cat = spec["category"]
             if cat not in models:
                 models[cat] = CategoryModel.load(spec["_model"], category=cat)
-                regions[cat] = region_model_points(models[cat])
+                regions[cat] = region_model_points(models[cat], args.protrude)
             scenario, placement, camera = trial_scenario(spec)
             X_WT, X_WO = scenario.table.pose.matrix(), scenario.X_WO()
             p_W, camera_W = observe(scenario)
@@ -96,7 +105,7 @@ def main(argv=None) -> int:
                 rows.append({"yaw_error_deg": round(yaw_error_deg(h.X_WO, X_WO), 3), "energy": round(h.energy, 3),
                              "support": support, "uncovered": int(h.uncovered)})
             line = {"category": cat, "instance": spec["instance"], "trial": spec["trial"],
-                    "n_observed": len(p_W), "n_region_points": len(regions[cat]),
+                    "n_observed": len(p_W), "n_region_points": len(regions[cat]), "protrude_m": args.protrude,
                     # the functional direction (+y of O) against the direction to the camera, about z: 0 = facing it
                     "functional_azimuth_deg": round((placement["yaw_deg"] + 90 - camera["azimuth_deg"] + 180) % 360
                                                     - 180, 1), "hypotheses": rows,
