@@ -109,6 +109,11 @@ PLAIN_RANKED_METHODS = ("latent_plain",)
 #: rule of ``benchmarks/results/experiments/s47_coverage`` (validation views, then simulated validation trials).
 UNCOVERED_NATS = 5.0
 COVERAGE_RANKED_CATEGORIES = ("drill",)
+#: Categories whose shape hypotheses are refined once more from the best fit's shape
+#: (``infer_latent_pose(reseed=True)``) by the methods that keep several (:func:`estimator_kwargs`). Adopted per
+#: category by the rule of ``benchmarks/results/experiments/s48_reseed`` (validation views, then simulated
+#: validation trials); it costs up to two more refines per view.
+RESEEDED_CATEGORIES = ("mug",)
 
 
 #: The shorter latent fit of ``latent_fast`` (``infer_latent_pose`` options): chosen on the committed held-out
@@ -130,6 +135,17 @@ ESTIMATORS = {
 
 #: Direct CPD's settings (outlier weight, iterations, tolerance).
 CPD_OPTIONS = {"w": 0.05, "max_iter": 100, "tol": 1e-5}
+
+
+def estimator_kwargs(method: str, category: str | None = None) -> dict:
+    """The ``infer_latent_pose`` options of ``method``'s estimator for an object of ``category``: its
+    :data:`ESTIMATORS` set-up, with ``reseed`` for the categories in :data:`RESEEDED_CATEGORIES` when the method
+    keeps several shape hypotheses."""
+    setup = ESTIMATORS[check_method(method)]
+    kwargs = setup.inference_kwargs
+    if setup.hypotheses > 1 and category in RESEEDED_CATEGORIES:
+        kwargs["reseed"] = True
+    return kwargs
 
 
 def check_method(method: str) -> str:

@@ -39,7 +39,7 @@ from catgrasp_drake.grasping.descriptor import motion_functional_point
 from catgrasp_drake.perception.object_cloud import points_from_cloud
 from catgrasp_drake.planning.model import make_planning_model, object_mesh_path
 from catgrasp_drake.planning.records import PlanParams, hold_plan
-from catgrasp_drake.prediction import ESTIMATORS, check_method, rigid_space
+from catgrasp_drake.prediction import ESTIMATORS, check_method, estimator_kwargs, rigid_space
 from catgrasp_drake.robot.models import ARM_JOINTS, HAND_BASE_LINK
 from catgrasp_drake.station.builder import StationHandles, add_station, make_station
 from catgrasp_drake.station.scenario import CameraSpec, Scenario
@@ -261,7 +261,7 @@ def make_transfer_diagram(scenario: Scenario, model: CategoryModel, meshcat: Mes
     builder = DiagramBuilder()
     h = add_station(builder, scenario, meshcat)
     space = rigid_space(model.space) if setup.rigid else model.space
-    inference_kwargs = setup.inference_kwargs | inference_kwargs  # (the caller's options win)
+    inference_kwargs = estimator_kwargs(method, model.category) | inference_kwargs  # (the caller's options win)
     estimator = builder.AddNamedSystem("shape_estimator", LatentShapeEstimator(
         space, scenario.table.pose.matrix(), yaw_candidates=yaw_candidates,
         view_policy=EXTRA_VIEW_POLICY.get(view, ("never", 0))[0],

@@ -468,6 +468,7 @@ def infer_latent_pose(
     drop_energy: float | None = DROP_ENERGY,
     drop_after: int = DROP_AFTER,
     plain_energies: bool = False,
+    reseed: bool = False,
 ) -> InferenceResult:
     """Fit latent x and a similarity (R, t, s) of ``space`` to ``observed`` (N, 3), metres.
 
@@ -523,6 +524,10 @@ def infer_latent_pose(
     (:data:`DROP_ENERGY`: the best fit and every hypothesis that keeps a posterior weight are unchanged).
     ``plain_energies``: with ``hypotheses`` > 1, each hypothesis also gets its ``plain_energy``
     (:func:`plain_energy`; about 2 ms each), for a posterior weighted by the paper's plain likelihood.
+    ``reseed``: with ``hypotheses`` > 1, every hypothesis but the lowest-energy one is refined once more from
+    the best fit's shape (its latent x and scale) at the hypothesis' own rotation and translation, and the
+    lower-energy of its two fits is kept: a start that converged to a poor shape at the right yaw (a drill
+    fitted turned round wins against it) gets the shape the data supports.
     """
     t0 = time.perf_counter()
     if not isinstance(space, ShapeSpace):
@@ -644,6 +649,17 @@ def infer_latent_pose(
                 list(each(lambda st: refine(st, max_iter, first_iter), go_on))
             finished = list(each(lambda rank: _finish(prob, refine_first[rank], O, w, space, residual_cpd,
                                                       residual_beta, residual_lam, rank), range(len(refine_first))))
+            if reseed and len(finished) > 1:  # the others again from the best fit's shape, at their own pose
+                b = min(range(len(finished)), key=lambda i: finished[i].energy)  # ties: the search's order
+                others = [i for i in range(len(finished)) if i != b]
+                again = [_State(x=finished[b].x.copy(), R=finished[i].R, t=finished[i].t, s=finished[b].s,
+                                sigma2=finished[i].sigma2, yaw=finished[i].yaw) for i in others]
+                list(each(lambda st: refine(st, max_iter), again))
+                for i, r in zip(others, each(lambda j: _finish(prob, again[j], O, w, space, residual_cpd,
+                                                               residual_beta, residual_lam, others[j]),
+                                             range(len(others)))):
+                    if r.energy < finished[i].energy:
+                        finished[i] = r
         finally:
             if pool is not None:
                 pool.shutdown()

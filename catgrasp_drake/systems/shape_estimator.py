@@ -431,6 +431,11 @@ class LatentShapeEstimator(LeafSystem):
     def space(self) -> ShapeSpace:
         return self._space
 
+    @property
+    def inference_kwargs(self) -> dict:
+        """The ``infer_latent_pose`` options every fit of this estimator uses (a copy)."""
+        return dict(self._kwargs)
+
     def _get(self, context) -> ShapeEstimate:
         return context.get_abstract_state(int(self._state)).get_value()
 

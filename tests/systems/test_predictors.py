@@ -190,3 +190,22 @@ def test_drill_hypotheses_are_ranked_by_energy_plus_their_uncovered_observed_poi
     assert [c.hypothesis for c in grasp_candidates("latent", drill, hyps)] == [1, 0]
     mug_like = dataclasses.replace(drill, category="mug")
     assert [c.hypothesis for c in grasp_candidates("latent", mug_like, hyps)] == [0, 1]
+
+
+def test_mug_hypotheses_are_reseeded_from_the_best_shape_and_no_other_category_or_method_is(drill):
+    """``RESEEDED_CATEGORIES`` (mugs): the methods that keep several shape hypotheses fit a mug with
+    ``reseed=True``; a drill, or a mug by a method with one hypothesis, is fitted as before. The transfer
+    diagram's estimator carries exactly those options, and the caller's own win."""
+    from catgrasp_drake.prediction import RESEEDED_CATEGORIES, estimator_kwargs
+
+    assert RESEEDED_CATEGORIES == ("mug",)
+    assert estimator_kwargs("latent", "mug") == {"hypotheses": 3, "reseed": True}
+    assert estimator_kwargs("latent", "drill") == estimator_kwargs("latent") == {"hypotheses": 3}
+    assert "reseed" not in estimator_kwargs("paper", "mug") and "reseed" not in estimator_kwargs("latent_map", "mug")
+    mug = CategoryModel.load(default_model_path("mug"), category="mug")
+    scenario = with_instance(load_scenario("mug_default"), "mug_12")
+    assert make_transfer_diagram(scenario, mug, method="latent").estimator.inference_kwargs["reseed"] is True
+    assert make_transfer_diagram(scenario, mug, method="latent", reseed=False).estimator.inference_kwargs[
+        "reseed"] is False
+    drill_scenario = with_instance(load_scenario("drill_default"), "drill_12")
+    assert "reseed" not in make_transfer_diagram(drill_scenario, drill, method="latent").estimator.inference_kwargs
