@@ -53,8 +53,11 @@ bit-identical to the earlier code, which took ~20 ms: see the report).
 * ``f64`` (session 46): ``new`` with every E-step's kernel in float64, as before ``kernel32`` (the default now
   takes the ``exp`` of its float64 exponents in float32: ``core.cpd.estep(kernel32=True)``).
 
+* ``noreseed`` (session 48): ``new`` without ``reseed`` -- the other shape hypotheses not refined again from the
+  best fit's shape (``prediction.RESEEDED_CATEGORIES``: the default for mugs only; elsewhere the same as ``new``).
+
 Run:  python benchmarks/bench_transfer.py [--category drill] [--seeds 5]
-      [--settings old new fast free parallel nodrop f64]
+      [--settings old new fast free parallel nodrop f64 noreseed]
 """
 
 from __future__ import annotations
@@ -83,7 +86,7 @@ from catgrasp_drake.transfer import make_transfer_diagram  # noqa: E402
 #: ``latent_fast`` method.
 SETTINGS = {"old": dict(voxel_size=None, **LEGACY_SEARCH), "new": {}, "fast": {"hypotheses": 1} | FAST_ESTIMATE,
             "free": {"upright": False}, "parallel": {"fit_threads": None}, "nodrop": {"drop_energy": None},
-            "f64": {"kernel32": False}}
+            "f64": {"kernel32": False}, "noreseed": {"reseed": False}}
 NAMES = ("render (sensor)", "cloud", "estimate", "  of which core", "regress", "LATENCY", "share outside core",
          "IK plan")
 
