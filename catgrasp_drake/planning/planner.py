@@ -92,6 +92,8 @@ from catgrasp_drake.robot.models import HAND_ACTUATED_JOINTS, INDEX_ACTUATED_JOI
 #: Joint offset (rad, ARM_JOINTS order) from the start that lifts the shoulder and bends the elbow:
 #: a pregrasp IK seed, and the first knot of approaches that must clear the table.
 ELBOW_RAISED = np.array([0.0, -0.4, 0.6, -0.2, 0.0, 0.0])
+#: The thumb's actuated joints (positions in ``HAND_ACTUATED_JOINTS``): what ``close_order="thumb_first"`` closes first.
+THUMB_JOINT_INDICES = [HAND_ACTUATED_JOINTS.index(j) for j in ("svh_thumb_flexion", "svh_thumb_opposition")]
 
 
 class PlanFailure(Exception):
@@ -374,6 +376,10 @@ def timeline_and_knots(q_arm_start: np.ndarray, postures: tuple[np.ndarray, np.n
         knot(t + params.reach_time * (i + 1) / len(reach), q, q_pre, "grasp" if i == len(reach) - 1 else "reach")
     t += params.reach_time
     tl["close"] = t
+    if params.close_order == "thumb_first":  # the thumb closed half-way, the other fingers still preshaped
+        q_thumb = q_pre.copy()
+        q_thumb[THUMB_JOINT_INDICES] = q_closed[THUMB_JOINT_INDICES]
+        knot(t + 0.5 * params.close_time, q_grasp, q_thumb, "thumb_closed")
     knot(t + params.close_time, q_grasp, q_closed, "closed")
     t += params.close_time + params.close_dwell
     knot(t, q_grasp, q_closed, "closed_dwell")

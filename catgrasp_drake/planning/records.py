@@ -13,10 +13,14 @@ from dataclasses import dataclass
 import numpy as np
 from pydrake.trajectories import PiecewisePolynomial
 
+from catgrasp_drake.errors import InputError
+
 PHASES = ("settle", "approach", "reach", "close", "lift", "hold", "shake", "press", "end")
 #: Failure kind of a plan (its status up to the colon) -> the trial's failure reason.
 FAILURE_REASONS = {"collision": "collision_before_closing", "unreachable": "unreachable",
                    "ik_failed": "unreachable", "branch_flip": "unreachable"}
+#: How the hand closes (``PlanParams.close_order``).
+CLOSE_ORDERS = ("together", "thumb_first")
 
 
 @dataclass(frozen=True)
@@ -29,6 +33,10 @@ class PlanParams:
     reach_time: float = 0.8
     close_time: float = 0.8
     close_dwell: float = 0.3
+    #: "together": every hand joint goes preshape -> closed over ``close_time``; "thumb_first": the thumb's
+    #: joints reach their closed values half-way through it while the others hold the preshape, then the others
+    #: close (:data:`CLOSE_ORDERS`).
+    close_order: str = "together"
     lift_time: float = 1.0
     hold_margin: float = 0.1
     shake_time: float = 1.0  # s, the disturbance after the hold
@@ -60,6 +68,10 @@ class PlanParams:
     # None: no check.
     object_penetration_tol: float | None = 0.004
     max_object_shift: float = 0.02  # m
+
+    def __post_init__(self):
+        if self.close_order not in CLOSE_ORDERS:
+            raise InputError(f"close_order: expected one of {', '.join(CLOSE_ORDERS)}, got {self.close_order!r}")
 
 
 @dataclass(frozen=True)

@@ -91,3 +91,38 @@ def test_the_hull_registered_per_plan_plans_as_a_hull_in_the_plant():
     again = robot.plan(motion)
     assert np.array_equal(again.q_arm, alone.q_arm) and np.array_equal(again.times, alone.times)
     assert robot.with_obstacle(hull_W[:3]) is robot  # fewer than 4 points: no object
+
+
+def test_thumb_first_closes_the_thumb_half_way_and_changes_nothing_else():
+    """``PlanParams(close_order="thumb_first")``: one more knot half-way through the closing, where the thumb's
+    joints are at their closed values and every other joint at the preshape; every other knot is the default
+    plan's, bit for bit. An unknown order is a one-line InputError."""
+    import dataclasses
+
+    import pytest
+
+    from catgrasp_drake.errors import InputError
+    from catgrasp_drake.planning.planner import THUMB_JOINT_INDICES
+    from catgrasp_drake.planning.records import PlanParams
+
+    model = CategoryModel.load(default_model_path("drill"), category="drill")
+    scenario = random_placement(with_instance(load_scenario("drill_default"), "drill_03"), 2)
+    X = scenario.X_WO()
+    motion = model.transfer(np.zeros(model.space.q), X[:3, :3], X[:3, 3], 1.0)
+    pm = make_planning_model(scenario, true_object_points_W(scenario))
+    together = pm.plan(motion)
+    thumb = pm.plan(motion, dataclasses.replace(PlanParams(), close_order="thumb_first"))
+    assert together.ok and thumb.ok and "thumb_closed" not in together.knot_names
+    k = thumb.knot_names.index("thumb_closed")
+    assert thumb.knot_names[:k] + thumb.knot_names[k + 1:] == together.knot_names
+    for field in ("times", "q_arm", "q_hand"):
+        assert np.array_equal(np.delete(getattr(thumb, field), k, axis=0), getattr(together, field)), field
+    c = together.knot_names.index("closed")
+    assert thumb.times[k] == (together.times[c - 1] + together.times[c]) / 2  # half-way through close_time
+    q_pre, q_closed, q_mid = together.q_hand[c - 1], together.q_hand[c], thumb.q_hand[k]
+    others = [i for i in range(len(q_mid)) if i not in THUMB_JOINT_INDICES]
+    assert np.array_equal(q_mid[THUMB_JOINT_INDICES], q_closed[THUMB_JOINT_INDICES])
+    assert np.array_equal(q_mid[others], q_pre[others])
+    assert not np.array_equal(q_pre[THUMB_JOINT_INDICES], q_closed[THUMB_JOINT_INDICES])  # the thumb does move
+    with pytest.raises(InputError, match="close_order"):
+        PlanParams(close_order="fingers_last")
