@@ -542,6 +542,32 @@ def trial_specs(config: BenchmarkConfig, model_paths: dict[str, str] | None = No
     return specs
 
 
+def observed_views(config: BenchmarkConfig):
+    """Every trial of ``config`` (single view, one method) seen once by the station camera, nothing simulated.
+
+    Yields ``(spec, model, scenario, placement, camera, p_W, camera_W)``:
+    - the trial's spec (:func:`trial_specs`) and its category's model, loaded once per category;
+    - the trial's scenario, placement and camera, as :func:`trial_scenario` gives them (the records' fields);
+    - the object's cloud in W (N, 3) m and the camera position in W (3,) (:func:`catgrasp_drake.transfer.observe`).
+
+    It is for probing the estimator over a split without simulating (e.g. the session-48 probes in
+    ``benchmarks/results/experiments``). InputError unless ``config`` has one view, "single", and one method.
+    """
+    from catgrasp_drake.category_model import CategoryModel
+    from catgrasp_drake.transfer import observe
+
+    if tuple(config.views) != ("single",) or len(config.methods) != 1:
+        raise InputError(f"observed_views: expected views ('single',) and one method, got views "
+                         f"{tuple(config.views)} and methods {tuple(config.methods)}")
+    models = {}
+    for spec in trial_specs(config):
+        if spec["category"] not in models:
+            models[spec["category"]] = CategoryModel.load(spec["_model"], category=spec["category"])
+        scenario, placement, camera = trial_scenario(spec)
+        p_W, camera_W = observe(scenario)
+        yield spec, models[spec["category"]], scenario, placement, camera, p_W, camera_W
+
+
 def run_benchmark(config: BenchmarkConfig, *, model_paths: dict[str, str] | None = None, progress=None) -> list[dict]:
     """Run every trial of ``config`` (cached, resumable) and return the records in spec order.
 

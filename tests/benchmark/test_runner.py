@@ -373,3 +373,23 @@ def test_the_stress_split_stretches_every_committed_instance_once(tmp_path):
     specs = trial_specs(replace(config, placements=1))
     assert len(specs) == len(objects) and all("object_sha256" in s for s in specs)
     assert deep.model_dir == str(tmp_path / "stress" / "mug" / "mug_04_deep")
+
+
+def test_observed_views_see_each_trial_of_a_split_once_without_simulating(tmp_path):
+    """``observed_views``: one view per trial spec (the smoke split: 2 drills, 1 placement), each the trial's own
+    scenario and camera, a cloud of the object in W around its true position; several views or methods are
+    refused with a one-line error."""
+    from catgrasp_drake.benchmark.runner import observed_views, trial_scenario
+
+    cfg = BenchmarkConfig(split="smoke", methods=("latent",), data_dir=str(tmp_path / "data"))
+    views = list(observed_views(cfg))
+    assert [v[0]["instance"] for v in views] == [s["instance"] for s in trial_specs(cfg)] == ["drill_00", "drill_01"]
+    for spec, model, scenario, placement, camera, p_W, camera_W in views:
+        assert model.category == "drill" and scenario.object.instance == spec["instance"]
+        assert (placement, camera) == trial_scenario(spec)[1:] and "yaw_deg" in placement and "azimuth_deg" in camera
+        assert p_W.shape[1] == 3 and len(p_W) > 200
+        assert np.linalg.norm(p_W.mean(axis=0)[:2] - scenario.X_WO()[:2, 3]) < 0.1  # the object, not the table
+        assert np.linalg.norm(camera_W - p_W.mean(axis=0)) > 0.3  # the camera stands back from it
+    for bad in (replace(cfg, views=("single", "full")), replace(cfg, methods=("latent", "rigid"))):
+        with pytest.raises(InputError, match="observed_views"):
+            next(observed_views(bad))

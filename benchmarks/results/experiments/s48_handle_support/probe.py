@@ -26,14 +26,13 @@ from scipy.spatial import cKDTree
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[4]))
 
-from catgrasp_drake.benchmark.runner import BenchmarkConfig, trial_scenario, trial_specs, yaw_error_deg  # noqa: E402
+from catgrasp_drake.benchmark.runner import BenchmarkConfig, observed_views, yaw_error_deg  # noqa: E402
 from catgrasp_drake.category_model import CategoryModel  # noqa: E402
 from catgrasp_drake.data.dataset import load_annotations  # noqa: E402
 from catgrasp_drake.grasping.constraints import load_constraint  # noqa: E402
 from catgrasp_drake.prediction import POSTERIOR_HYPOTHESES, ShapeHypothesis, grasp_candidates  # noqa: E402
 from catgrasp_drake.station.judge import points_in_region  # noqa: E402
 from catgrasp_drake.systems.shape_estimator import estimate_on_table  # noqa: E402
-from catgrasp_drake.transfer import observe  # noqa: E402
 
 #: Radii (m) of the support counts written; the ranking under test (README) uses 8 mm and 5 nats per point.
 RADII_M = (0.005, 0.008, 0.012)
@@ -81,17 +80,14 @@ def main(argv=None) -> int:
     config = BenchmarkConfig(split=args.split, categories=tuple(args.categories), methods=("latent",),
                              views=("single",), placements=args.placements, seed=args.seed,
                              data_seed=args.data_seed, data_dir=args.data)
-    models, regions = {}, {}
+    regions = {}
     with open(args.out, "w") as f:
-        for spec in trial_specs(config):
+        for spec, model, scenario, placement, camera, p_W, camera_W in observed_views(config):
             cat = spec["category"]
-            if cat not in models:
-                models[cat] = CategoryModel.load(spec["_model"], category=cat)
-                regions[cat] = region_model_points(models[cat], args.protrude)
-            scenario, placement, camera = trial_scenario(spec)
+            if cat not in regions:
+                regions[cat] = region_model_points(model, args.protrude)
             X_WT, X_WO = scenario.table.pose.matrix(), scenario.X_WO()
-            p_W, camera_W = observe(scenario)
-            est = estimate_on_table(models[cat].space, p_W, X_WT, camera_W=camera_W, yaw_candidates=8,
+            est = estimate_on_table(model.space, p_W, X_WT, camera_W=camera_W, yaw_candidates=8,
                                     hypotheses=POSTERIOR_HYPOTHESES)
             if not est.ok:
                 continue
@@ -109,8 +105,8 @@ def main(argv=None) -> int:
                     # the functional direction (+y of O) against the direction to the camera, about z: 0 = facing it
                     "functional_azimuth_deg": round((placement["yaw_deg"] + 90 - camera["azimuth_deg"] + 180) % 360
                                                     - 180, 1), "hypotheses": rows,
-                    "first_today": first_hypothesis(models[cat], hyps, [float(h.energy) for h in hyps]),
-                    "first_support": first_hypothesis(models[cat], hyps, ranked)}
+                    "first_today": first_hypothesis(model, hyps, [float(h.energy) for h in hyps]),
+                    "first_support": first_hypothesis(model, hyps, ranked)}
             f.write(json.dumps(line) + "\n")
             f.flush()
             print(cat, spec["instance"], spec["trial"],

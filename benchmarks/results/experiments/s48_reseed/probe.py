@@ -20,11 +20,9 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[4]))
 
-from catgrasp_drake.benchmark.runner import BenchmarkConfig, trial_scenario, trial_specs, yaw_error_deg  # noqa: E402
-from catgrasp_drake.category_model import CategoryModel  # noqa: E402
+from catgrasp_drake.benchmark.runner import BenchmarkConfig, observed_views, yaw_error_deg  # noqa: E402
 from catgrasp_drake.prediction import POSTERIOR_HYPOTHESES, ShapeHypothesis, grasp_candidates  # noqa: E402
 from catgrasp_drake.systems.shape_estimator import estimate_on_table  # noqa: E402
-from catgrasp_drake.transfer import observe  # noqa: E402
 
 
 def fit(model, p_W, X_WT, camera_W, X_WO, reseed: bool) -> dict | None:
@@ -54,17 +52,12 @@ def main(argv=None) -> int:
     config = BenchmarkConfig(split=args.split, categories=tuple(args.categories), methods=("latent",),
                              views=("single",), placements=args.placements, seed=args.seed,
                              data_seed=args.data_seed, data_dir=args.data)
-    models = {}
     with open(args.out, "w") as f:
-        for spec in trial_specs(config):
+        for spec, model, scenario, placement, camera, p_W, camera_W in observed_views(config):
             cat = spec["category"]
-            if cat not in models:
-                models[cat] = CategoryModel.load(spec["_model"], category=cat)
-            scenario, placement, camera = trial_scenario(spec)
             X_WT, X_WO = scenario.table.pose.matrix(), scenario.X_WO()
-            p_W, camera_W = observe(scenario)
-            today = fit(models[cat], p_W, X_WT, camera_W, X_WO, False)
-            again = fit(models[cat], p_W, X_WT, camera_W, X_WO, True)
+            today = fit(model, p_W, X_WT, camera_W, X_WO, False)
+            again = fit(model, p_W, X_WT, camera_W, X_WO, True)
             if today is None or again is None:
                 continue
             line = {"category": cat, "instance": spec["instance"], "trial": spec["trial"],
