@@ -87,13 +87,13 @@ from catgrasp_drake.planning.scene import (
     solve_ik_continuous,
     table_raise,
 )
-from catgrasp_drake.robot.models import HAND_ACTUATED_JOINTS, INDEX_ACTUATED_JOINTS
+from catgrasp_drake.robot.models import HAND_ACTUATED_JOINTS, INDEX_ACTUATED_JOINTS, THUMB_ACTUATED_JOINTS
 
 #: Joint offset (rad, ARM_JOINTS order) from the start that lifts the shoulder and bends the elbow:
 #: a pregrasp IK seed, and the first knot of approaches that must clear the table.
 ELBOW_RAISED = np.array([0.0, -0.4, 0.6, -0.2, 0.0, 0.0])
-#: The thumb's actuated joints (positions in ``HAND_ACTUATED_JOINTS``): what ``close_order="thumb_first"`` closes first.
-THUMB_JOINT_INDICES = [HAND_ACTUATED_JOINTS.index(j) for j in ("svh_thumb_flexion", "svh_thumb_opposition")]
+#: Positions of ``THUMB_ACTUATED_JOINTS`` in a hand posture (``HAND_ACTUATED_JOINTS`` order).
+THUMB_JOINT_INDICES = [HAND_ACTUATED_JOINTS.index(j) for j in THUMB_ACTUATED_JOINTS]
 
 
 class PlanFailure(Exception):

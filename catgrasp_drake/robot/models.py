@@ -77,6 +77,8 @@ FINGER_DISTAL_LINKS: dict[str, str] = {
 INDEX_DISTAL_LINK = FINGER_DISTAL_LINKS["index"]
 #: The index finger's actuated joints (proximal, distal): closed further to press a trigger.
 INDEX_ACTUATED_JOINTS: tuple[str, ...] = ("svh_index_proximal", "svh_index_distal")
+#: The thumb's actuated joints (flexion, opposition): what ``PlanParams(close_order="thumb_first")`` closes first.
+THUMB_ACTUATED_JOINTS: tuple[str, ...] = ("svh_thumb_flexion", "svh_thumb_opposition")
 #: Links of the thumb (any contact of these counts as "thumb contact").
 THUMB_LINKS: tuple[str, ...] = (
     "svh_thumb_base_link",
