@@ -656,9 +656,9 @@ def infer_latent_pose(
                 again = [_State(x=finished[b].x.copy(), R=finished[i].R, t=finished[i].t, s=finished[b].s,
                                 sigma2=finished[i].sigma2, yaw=finished[i].yaw) for i in others]
                 list(each(lambda st: refine(st, max_iter), again))
-                for i, r in zip(others, each(lambda j: _finish(prob, again[j], O, w, space, residual_cpd,
-                                                               residual_beta, residual_lam, others[j]),
-                                             range(len(others)))):
+                redone = list(each(lambda j: _finish(prob, again[j], O, w, space, residual_cpd, residual_beta,
+                                                     residual_lam, others[j]), range(len(others))))
+                for i, r in zip(others, redone):
                     if r.energy < finished[i].energy:
                         finished[i] = r
         finally:
