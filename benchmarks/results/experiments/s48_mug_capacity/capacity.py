@@ -32,6 +32,7 @@ from catgrasp_drake.data.categories import generate_instance  # noqa: E402
 from catgrasp_drake.data.dataset import instance_clouds, instance_seed, read_annotations  # noqa: E402
 from catgrasp_drake.data.meshes import read_mesh  # noqa: E402
 from catgrasp_drake.data.pointclouds import full_cloud  # noqa: E402
+from catgrasp_drake.station.judge import points_in_region  # noqa: E402
 
 CLOUD_VOXEL = 0.005
 
@@ -43,13 +44,6 @@ def extra_clouds(n: int, voxel: float) -> list[np.ndarray]:
         gen = generate_instance("mug", np.random.default_rng(instance_seed("mug", i)))
         out.append(full_cloud(gen.mesh, voxel=voxel))
     return out
-
-
-def in_box(points, box) -> np.ndarray:
-    c, h = np.asarray(box["center"]), np.asarray(box["half_extents"])
-    R = np.asarray(box.get("rotation", np.eye(3)))
-    local = (points - c) @ R
-    return np.all(np.abs(local) <= h, axis=1)
 
 
 def main(argv=None) -> int:
@@ -76,7 +70,8 @@ def main(argv=None) -> int:
                 cloud = full_cloud(mesh, voxel=CLOUD_VOXEL)
                 r = infer_latent_pose(space, cloud, yaw_candidates=8)
                 d = cKDTree(r.completed).query(cloud)[0]
-                handle = in_box(cloud, ann["regions"]["handle"]) if "handle" in ann.get("regions", {}) else None
+                handle = (points_in_region(cloud, np.eye(4), ann["regions"]["handle"], 0.0)
+                          if "handle" in ann.get("regions", {}) else None)
                 yaw = float(np.degrees(np.arctan2(r.R[1, 0], r.R[0, 0])))
                 row = {"beta": beta, "extra": n, "q": space.q, "instance": name, "yaw_deg": round(yaw, 1),
                        "residual_mm": round(1e3 * d.mean(), 2), "scale": round(float(r.s), 3),
